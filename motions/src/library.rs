@@ -1,0 +1,372 @@
+//! The built-in motion library: procedural, parameterized motions at 30 fps.
+//!
+//! A motion is named `NAME` or `NAME:key=value,...` with the keys `speed` (tempo multiplier,
+//! default 1, range 0.25-3), `amplitude` (joint-angle multiplier, default 1, range 0-1.5) and
+//! `duration` (seconds, default per motion, at most 600). Variants of the same motion differ in
+//! these parameters, so training and held-out test sets can use different ones.
+//!
+//! Joint angles are smooth functions of time (sines and smooth bumps) within human ranges,
+//! eased in over the first 0.6 s so every motion starts from standing. The
+//! root translation is not scripted: it comes from planting the feet ([`plant_feet`]), so gait
+//! motions walk forward without foot sliding and squats lower the pelvis.
+
+use std::f64::consts::PI;
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use crate::body_model::BodyModel;
+use crate::error::{Error, Result};
+use crate::forward::{FramePose, ShapedBody};
+use crate::motion::{Motion, OUTPUT_FPS};
+use crate::rotation::quat_to_axis_angle;
+use crate::skeleton::{NUM_JOINTS, POSE_DIM};
+
+/// One entry of the library.
+#[derive(Debug, Clone, Copy)]
+pub struct MotionInfo {
+    /// Name used on the command line.
+    pub name: &'static str,
+    /// What the body does.
+    pub description: &'static str,
+    /// Default duration, seconds.
+    pub default_duration: f64,
+}
+
+/// The built-in motions.
+pub const MOTIONS: [MotionInfo; 10] = [
+    MotionInfo { name: "walk", description: "walking forward at about 1 m/s, arms swinging", default_duration: 4.0 },
+    MotionInfo { name: "run", description: "jogging forward, trunk leaning, elbows bent", default_duration: 3.0 },
+    MotionInfo { name: "jumping_jacks", description: "jumping jacks: arms overhead and legs apart, with hops", default_duration: 4.0 },
+    MotionInfo { name: "arm_raise", description: "both arms raised sideways overhead and lowered", default_duration: 6.0 },
+    MotionInfo { name: "arm_swing", description: "arms swinging forward and back in opposition", default_duration: 4.0 },
+    MotionInfo { name: "squat", description: "deep squats with arms reaching forward", default_duration: 6.0 },
+    MotionInfo { name: "torso_twist", description: "upper body twisting left and right, elbows bent", default_duration: 5.0 },
+    MotionInfo { name: "turn", description: "stepping in place while turning left (90 deg/s)", default_duration: 4.0 },
+    MotionInfo { name: "kick", description: "front kicks with the right leg, arms on guard", default_duration: 4.0 },
+    MotionInfo { name: "sway", description: "dance-like side-to-side sway with knee bounce and arm sway", default_duration: 6.0 },
+];
+
+/// A parsed motion request: a library name and its parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotionSpec {
+    /// Library name.
+    pub name: String,
+    /// Tempo multiplier.
+    pub speed: f64,
+    /// Joint-angle multiplier.
+    pub amplitude: f64,
+    /// Duration, seconds.
+    pub duration: f64,
+}
+
+impl MotionSpec {
+    /// Parses `NAME` or `NAME:speed=1.2,amplitude=0.8,duration=5`.
+    pub fn parse(text: &str) -> Result<Self> {
+        let (name, params) = text.split_once(':').unwrap_or((text, ""));
+        let unknown = |reason: String| Error::UnknownMotion { name: text.to_string(), reason };
+        let info = find(name).ok_or_else(|| {
+            let names: Vec<&str> = MOTIONS.iter().map(|m| m.name).collect();
+            unknown(format!("built-in motions are {}", names.join(", ")))
+        })?;
+        let mut spec = Self { name: info.name.to_string(), speed: 1.0, amplitude: 1.0, duration: info.default_duration };
+        for kv in params.split(',').filter(|s| !s.trim().is_empty()) {
+            let (k, v) = kv.split_once('=').ok_or_else(|| unknown(format!("'{kv}' is not key=value")))?;
+            let value: f64 = v.trim().parse().map_err(|_| unknown(format!("'{v}' is not a number")))?;
+            let (slot, lo, hi) = match k.trim() {
+                "speed" => (&mut spec.speed, 0.25, 3.0),
+                "amplitude" => (&mut spec.amplitude, 0.0, 1.5),
+                "duration" => (&mut spec.duration, 1.0 / OUTPUT_FPS, 600.0),
+                other => return Err(unknown(format!("unknown parameter '{other}' (speed, amplitude, duration)"))),
+            };
+            if !(value.is_finite() && value >= lo && value <= hi) {
+                return Err(unknown(format!("{k} = {value} is outside [{lo}, {hi}]")));
+            }
+            *slot = value;
+        }
+        Ok(spec)
+    }
+
+    /// The canonical text form (parameters that differ from the defaults only).
+    pub fn label(&self) -> String {
+        let info = find(&self.name).expect("spec names come from the library");
+        let mut parts = Vec::new();
+        if self.speed != 1.0 {
+            parts.push(format!("speed={}", self.speed));
+        }
+        if self.amplitude != 1.0 {
+            parts.push(format!("amplitude={}", self.amplitude));
+        }
+        if self.duration != info.default_duration {
+            parts.push(format!("duration={}", self.duration));
+        }
+        if parts.is_empty() { self.name.clone() } else { format!("{}:{}", self.name, parts.join(",")) }
+    }
+
+    /// Generates the motion at 30 fps for a body, planting the feet of that skeleton.
+    pub fn generate(&self, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
+        let count = (self.duration * OUTPUT_FPS).round().max(1.0) as usize;
+        let frames: Vec<FramePose> = (0..count)
+            .map(|k| {
+                let t = k as f64 / OUTPUT_FPS;
+                let mut b = PoseBuilder::default();
+                let lift = joint_angles(&self.name, t, self.speed, self.amplitude * ease_in(t), &mut b);
+                FramePose { pose: b.pose(), transl: [0.0, lift, 0.0] }
+            })
+            .collect();
+        let frames = plant_feet(model, shaped, frames);
+        Motion::new(self.label(), OUTPUT_FPS, frames)
+    }
+}
+
+/// Looks up a library entry by name.
+pub fn find(name: &str) -> Option<&'static MotionInfo> {
+    MOTIONS.iter().find(|m| m.name == name)
+}
+
+/// Accumulates joint rotations: each `turn` is applied after the joint's earlier turns (about
+/// axes of the parent's frame, which in the T-pose rest is aligned with the world).
+struct PoseBuilder {
+    rotations: [UnitQuaternion<f64>; NUM_JOINTS],
+}
+
+impl Default for PoseBuilder {
+    fn default() -> Self {
+        Self { rotations: [UnitQuaternion::identity(); NUM_JOINTS] }
+    }
+}
+
+impl PoseBuilder {
+    fn turn(&mut self, joint: usize, axis: Axis, degrees: f64) -> &mut Self {
+        let axis = match axis {
+            Axis::X => Vector3::x_axis(),
+            Axis::Y => Vector3::y_axis(),
+            Axis::Z => Vector3::z_axis(),
+        };
+        self.rotations[joint] = UnitQuaternion::from_axis_angle(&axis, degrees.to_radians()) * self.rotations[joint];
+        self
+    }
+
+    /// Flexes a hip (thigh forward), knee (shin back) and ankle (toes up) of one side.
+    fn leg(&mut self, side: Side, hip_flex: f64, knee_flex: f64, ankle_dorsi: f64) {
+        let (hip, knee, ankle) = match side {
+            Side::Left => (1, 4, 7),
+            Side::Right => (2, 5, 8),
+        };
+        self.turn(hip, Axis::X, -hip_flex).turn(knee, Axis::X, knee_flex).turn(ankle, Axis::X, -ankle_dorsi);
+    }
+
+    /// Places an arm: `down` degrees below horizontal, `forward` degrees of swing to the front,
+    /// elbow bent `elbow` degrees towards the front.
+    fn arm(&mut self, side: Side, down: f64, forward: f64, elbow: f64) {
+        let (shoulder, el, s) = match side {
+            Side::Left => (16, 18, 1.0),
+            Side::Right => (17, 19, -1.0),
+        };
+        self.turn(shoulder, Axis::Z, -s * down).turn(shoulder, Axis::X, -forward).turn(el, Axis::Y, -s * elbow);
+    }
+
+    fn pose(&self) -> [f64; POSE_DIM] {
+        let mut pose = [0.0; POSE_DIM];
+        for (j, q) in self.rotations.iter().enumerate() {
+            pose[3 * j..3 * j + 3].copy_from_slice(&quat_to_axis_angle(q));
+        }
+        pose
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+#[derive(Clone, Copy)]
+enum Side {
+    Left,
+    Right,
+}
+
+/// Seconds over which a motion's amplitude eases in from standing, so the body (and the root
+/// moved by foot planting) starts at rest instead of mid-stride.
+const EASE_IN_SECONDS: f64 = 0.6;
+
+fn ease_in(t: f64) -> f64 {
+    let u = (t / EASE_IN_SECONDS).min(1.0);
+    u * u * (3.0 - 2.0 * u)
+}
+
+/// A smooth bump in [0, 1] peaking at phase 0 (period 2 pi), zero slope everywhere it meets 0.
+fn bump(phase: f64) -> f64 {
+    ((1.0 + phase.cos()) / 2.0).powi(3)
+}
+
+/// A smooth 0 -> 1 -> 0 cycle over one period.
+fn rise(phase: f64) -> f64 {
+    (1.0 - phase.cos()) / 2.0
+}
+
+/// Sets the joint angles of motion `name` at time `t` (seconds) and returns an extra vertical
+/// lift of the root (metres) for motions that leave the ground.
+fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> f64 {
+    let phase = |hz: f64| 2.0 * PI * hz * speed * t;
+    match name {
+        "walk" => {
+            let p = phase(0.9);
+            b.leg(Side::Left, a * (5.0 + 22.0 * p.sin()), a * (5.0 + 55.0 * bump(p + 1.0)), a * 10.0 * bump(p + 1.0));
+            b.leg(Side::Right, a * (5.0 - 22.0 * p.sin()), a * (5.0 + 55.0 * bump(p + 1.0 + PI)), a * 10.0 * bump(p + 1.0 + PI));
+            b.arm(Side::Left, 70.0, -a * 15.0 * p.sin(), 15.0 + a * 10.0 * rise(p + PI));
+            b.arm(Side::Right, 70.0, a * 15.0 * p.sin(), 15.0 + a * 10.0 * rise(p));
+            b.turn(0, Axis::Y, a * 4.0 * p.sin()).turn(3, Axis::Y, -a * 3.0 * p.sin()).turn(6, Axis::Y, -a * 2.0 * p.sin());
+            0.0
+        }
+        "run" => {
+            let p = phase(1.25);
+            b.leg(Side::Left, a * (15.0 + 28.0 * p.sin()), a * (15.0 + 75.0 * bump(p + 1.0)), a * 10.0 * bump(p + 1.0));
+            b.leg(Side::Right, a * (15.0 - 28.0 * p.sin()), a * (15.0 + 75.0 * bump(p + 1.0 + PI)), a * 10.0 * bump(p + 1.0 + PI));
+            b.arm(Side::Left, 70.0, -a * 30.0 * p.sin(), 80.0);
+            b.arm(Side::Right, 70.0, a * 30.0 * p.sin(), 80.0);
+            b.turn(3, Axis::X, a * 8.0).turn(3, Axis::Y, -a * 5.0 * p.sin()).turn(12, Axis::X, -a * 6.0);
+            0.0
+        }
+        "jumping_jacks" => {
+            let p = phase(0.9);
+            let open = rise(p);
+            b.arm(Side::Left, 70.0 - a * 145.0 * open, 0.0, 10.0);
+            b.arm(Side::Right, 70.0 - a * 145.0 * open, 0.0, 10.0);
+            b.turn(1, Axis::Z, a * 15.0 * open).turn(2, Axis::Z, -a * 15.0 * open);
+            b.turn(7, Axis::Z, -a * 15.0 * open).turn(8, Axis::Z, a * 15.0 * open);
+            b.leg(Side::Left, 0.0, a * 10.0 * p.sin().powi(2), 0.0);
+            b.leg(Side::Right, 0.0, a * 10.0 * p.sin().powi(2), 0.0);
+            a * 0.06 * p.sin().powi(2)
+        }
+        "arm_raise" => {
+            let up = rise(phase(0.35));
+            b.arm(Side::Left, 70.0 - a * 150.0 * up, 0.0, 10.0);
+            b.arm(Side::Right, 70.0 - a * 150.0 * up, 0.0, 10.0);
+            0.0
+        }
+        "arm_swing" => {
+            let p = phase(0.8);
+            b.arm(Side::Left, 70.0, a * 55.0 * p.sin(), 20.0);
+            b.arm(Side::Right, 70.0, -a * 55.0 * p.sin(), 20.0);
+            let bounce = a * 6.0 * rise(2.0 * p);
+            b.leg(Side::Left, bounce / 2.0, bounce, bounce / 2.0);
+            b.leg(Side::Right, bounce / 2.0, bounce, bounce / 2.0);
+            0.0
+        }
+        "squat" => {
+            let d = a * rise(phase(0.3));
+            // Foot flat: ankle dorsiflexion = knee flexion - hip flexion.
+            b.leg(Side::Left, 95.0 * d, 115.0 * d, 20.0 * d);
+            b.leg(Side::Right, 95.0 * d, 115.0 * d, 20.0 * d);
+            b.turn(3, Axis::X, 25.0 * d).turn(6, Axis::X, 10.0 * d).turn(12, Axis::X, -20.0 * d);
+            b.arm(Side::Left, 70.0, 75.0 * d, 10.0);
+            b.arm(Side::Right, 70.0, 75.0 * d, 10.0);
+            0.0
+        }
+        "torso_twist" => {
+            let s = a * phase(0.4).sin();
+            b.turn(3, Axis::Y, 12.0 * s).turn(6, Axis::Y, 12.0 * s).turn(9, Axis::Y, 10.0 * s).turn(12, Axis::Y, -6.0 * s);
+            b.arm(Side::Left, 55.0, 20.0, 70.0);
+            b.arm(Side::Right, 55.0, 20.0, 70.0);
+            0.0
+        }
+        "turn" => {
+            let p = phase(1.2);
+            b.turn(0, Axis::Y, 90.0 * speed * t);
+            b.leg(Side::Left, a * 25.0 * bump(p), a * 45.0 * bump(p), a * 10.0 * bump(p));
+            b.leg(Side::Right, a * 25.0 * bump(p + PI), a * 45.0 * bump(p + PI), a * 10.0 * bump(p + PI));
+            b.arm(Side::Left, 70.0, 0.0, 20.0);
+            b.arm(Side::Right, 70.0, 0.0, 20.0);
+            0.0
+        }
+        "kick" => {
+            let k = rise(phase(0.5)).powi(2);
+            b.leg(Side::Right, a * 75.0 * k, a * 70.0 * 4.0 * k * (1.0 - k), -a * 20.0 * k);
+            b.leg(Side::Left, a * 5.0 * k, a * 10.0 * k, a * 5.0 * k);
+            b.turn(3, Axis::X, -a * 10.0 * k);
+            b.arm(Side::Left, 60.0, 30.0, 100.0);
+            b.arm(Side::Right, 60.0, 30.0 - a * 20.0 * k, 100.0);
+            0.0
+        }
+        "sway" => {
+            let p = phase(0.5);
+            let side = a * p.sin();
+            b.turn(1, Axis::Z, 6.0 * side).turn(2, Axis::Z, 6.0 * side).turn(7, Axis::Z, -6.0 * side).turn(8, Axis::Z, -6.0 * side);
+            let bounce = a * 10.0 * rise(2.0 * p);
+            b.leg(Side::Left, bounce / 2.0, bounce, bounce / 2.0);
+            b.leg(Side::Right, bounce / 2.0, bounce, bounce / 2.0);
+            b.turn(3, Axis::Z, -5.0 * side).turn(6, Axis::Z, -4.0 * side).turn(15, Axis::Z, 4.0 * side);
+            b.arm(Side::Left, 65.0 - 10.0 * side, 15.0 * side, 30.0);
+            b.arm(Side::Right, 65.0 + 10.0 * side, -15.0 * side, 30.0);
+            0.0
+        }
+        other => unreachable!("motion names are checked by MotionSpec::parse: {other}"),
+    }
+}
+
+/// Softness of the stance-foot choice, metres: feet closer in height than this share the stance.
+const STANCE_SOFTNESS: f64 = 0.02;
+/// Width (frames) of the Gaussian that smooths the planted horizontal root velocity, so a
+/// stance change never jerks the body (a sixth of a second at 30 fps).
+const VELOCITY_SMOOTHING_FRAMES: f64 = 5.0;
+
+/// Sets each frame's root translation so the feet stay planted: horizontally, the root moves
+/// opposite to the stance foot (the lower one, softly weighted) so that foot does not slide;
+/// vertically, the lower foot stays at its first-frame height. Any lift already in a frame's
+/// translation (hops) is added on top. The root velocity is smoothed over about a sixth of a
+/// second, so stance changes do not jerk the body (at the cost of a few millimetres of slip
+/// around touch-down).
+pub fn plant_feet(model: &BodyModel, shaped: &ShapedBody, frames: Vec<FramePose>) -> Vec<FramePose> {
+    let feet = |f: &FramePose| {
+        let g = model.joint_transforms(shaped, &FramePose { pose: f.pose, transl: [0.0; 3] });
+        let side = |ankle: usize, ball: usize| {
+            let (a, b) = (g[ankle].translation, g[ball].translation);
+            let low = if a.y < b.y { a } else { b };
+            (low, a.y.min(b.y))
+        };
+        [side(7, 10), side(8, 11)]
+    };
+    let soft_min = |l: f64, r: f64| {
+        let m = l.min(r);
+        m - STANCE_SOFTNESS * ((-(l - m) / STANCE_SOFTNESS).exp() + (-(r - m) / STANCE_SOFTNESS).exp()).ln()
+    };
+    // Per frame: the root's step that keeps the stance foot still (horizontal) and the lower
+    // foot at its first-frame height (vertical).
+    let mut steps = vec![[0.0; 3]; frames.len()];
+    let mut previous: Option<(Vector3<f64>, Vector3<f64>, f64)> = None;
+    for (k, f) in frames.iter().enumerate() {
+        let [(pl, yl), (pr, yr)] = feet(f);
+        let low = soft_min(yl, yr);
+        if let Some((ql, qr, previous_low)) = previous {
+            let wl = 1.0 / (1.0 + ((yl - yr) / STANCE_SOFTNESS).exp());
+            let delta: Vector3<f64> = (pl - ql) * wl + (pr - qr) * (1.0 - wl);
+            steps[k] = [-delta.x, previous_low - low, -delta.z];
+        }
+        previous = Some((pl, pr, low));
+    }
+    let reach = (3.0 * VELOCITY_SMOOTHING_FRAMES) as isize;
+    let mut root = [0.0; 3];
+    let mut out = Vec::with_capacity(frames.len());
+    for (k, f) in frames.iter().enumerate() {
+        if k > 0 {
+            let (mut sum, mut norm) = ([0.0; 3], 0.0);
+            for d in -reach..=reach {
+                let i = k as isize + d;
+                if i >= 1 && (i as usize) < frames.len() {
+                    let w = (-0.5 * (d as f64 / VELOCITY_SMOOTHING_FRAMES).powi(2)).exp();
+                    for c in 0..3 {
+                        sum[c] += w * steps[i as usize][c];
+                    }
+                    norm += w;
+                }
+            }
+            for c in 0..3 {
+                root[c] += sum[c] / norm;
+            }
+        }
+        out.push(FramePose { pose: f.pose, transl: [root[0], root[1] + f.transl[1], root[2]] });
+    }
+    out
+}

@@ -1,0 +1,236 @@
+//! Reading named numeric arrays out of .npz files (as written by `np.savez`/`np.savez_compressed`)
+//! with the dtype flexibility real SMPL and AMASS files need, and errors naming file and key.
+
+use std::io::{Read, Seek};
+use std::path::{Path, PathBuf};
+
+use npyz::npz::NpzArchive;
+use npyz::{DType, TypeChar};
+
+use crate::error::{Error, Result};
+
+/// An array read from an npz: its shape and values converted to `f64`.
+#[derive(Debug, Clone)]
+pub struct Array {
+    /// The array's shape (empty for a 0-d scalar).
+    pub shape: Vec<usize>,
+    /// Values in C order.
+    pub data: Vec<f64>,
+}
+
+/// An opened npz file whose arrays are read on demand.
+pub struct Npz<R: Read + Seek> {
+    path: PathBuf,
+    archive: NpzArchive<R>,
+}
+
+impl Npz<std::io::BufReader<std::fs::File>> {
+    /// Opens `path`, recognising a Python pickle (a common mistake with SMPL files) by its magic.
+    pub fn open(path: &Path) -> Result<Self> {
+        let mut head = [0u8; 2];
+        let mut file = std::fs::File::open(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let n = file.read(&mut head).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        if n == 2 && head[0] == 0x80 && head[1] <= 5 {
+            return Err(Error::Pickle {
+                path: path.to_path_buf(),
+            });
+        }
+        let archive = NpzArchive::open(path).map_err(|e| Error::NotNpz {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            archive,
+        })
+    }
+}
+
+impl<R: Read + Seek> Npz<R> {
+    /// Wraps an npz held in any seekable reader (e.g. bytes compiled into the binary); `path`
+    /// is only used in error messages.
+    pub fn from_reader(reader: R, path: &Path) -> Result<Self> {
+        let archive = NpzArchive::new(reader).map_err(|e| Error::NotNpz {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            archive,
+        })
+    }
+
+    /// The file this archive came from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Names of the arrays in the archive.
+    pub fn keys(&self) -> Vec<String> {
+        self.archive.array_names().map(str::to_string).collect()
+    }
+
+    /// Whether the archive holds `key`.
+    pub fn has(&self, key: &str) -> bool {
+        self.archive.array_names().any(|k| k == key)
+    }
+
+    fn bad(&self, key: &str, problem: impl Into<String>) -> Error {
+        bad_array(&self.path, key, problem)
+    }
+
+    /// Reads a numeric array (float, signed or unsigned integer, any width, little or big
+    /// endian) as `f64`. Returns `None` if the key is absent.
+    pub fn numeric(&mut self, key: &str) -> Result<Option<Array>> {
+        let path = self.path.clone();
+        let Some(file) = self.archive.by_name(key).map_err(|e| Error::BadArray {
+            path: path.clone(),
+            key: key.to_string(),
+            problem: e.to_string(),
+        })?
+        else {
+            return Ok(None);
+        };
+        let shape: Vec<usize> = file.shape().iter().map(|&s| s as usize).collect();
+        let DType::Plain(ts) = file.dtype() else {
+            return Err(bad_array(&path, key, "structured arrays are not supported"));
+        };
+        let size = ts.size_field();
+        let io = |e: std::io::Error| Error::BadArray {
+            path: path.clone(),
+            key: key.to_string(),
+            problem: e.to_string(),
+        };
+        let data: Vec<f64> = match (ts.type_char(), size) {
+            (TypeChar::Float, 8) => file.into_vec::<f64>().map_err(io)?,
+            (TypeChar::Float, 4) => file
+                .into_vec::<f32>()
+                .map_err(io)?
+                .into_iter()
+                .map(f64::from)
+                .collect(),
+            (TypeChar::Int, 8) => to_f64(file.into_vec::<i64>().map_err(io)?),
+            (TypeChar::Int, 4) => to_f64(file.into_vec::<i32>().map_err(io)?),
+            (TypeChar::Int, 2) => to_f64(file.into_vec::<i16>().map_err(io)?),
+            (TypeChar::Int, 1) => to_f64(file.into_vec::<i8>().map_err(io)?),
+            (TypeChar::Uint, 8) => to_f64(file.into_vec::<u64>().map_err(io)?),
+            (TypeChar::Uint, 4) => to_f64(file.into_vec::<u32>().map_err(io)?),
+            (TypeChar::Uint, 2) => to_f64(file.into_vec::<u16>().map_err(io)?),
+            (TypeChar::Uint, 1) => to_f64(file.into_vec::<u8>().map_err(io)?),
+            (TypeChar::Object, _) => {
+                return Err(bad_array(
+                    &path,
+                    key,
+                    "holds pickled Python objects (e.g. a chumpy or scipy.sparse array); \
+                     save it as a plain numpy array",
+                ));
+            }
+            _ => {
+                return Err(bad_array(&path, key, format!("unsupported dtype '{ts}' (expected numbers)")));
+            }
+        };
+        let expected: usize = shape.iter().product();
+        if data.len() != expected {
+            return Err(bad_array(&path, key, "truncated array data"));
+        }
+        Ok(Some(Array { shape, data }))
+    }
+
+    /// Reads a required numeric array, checking its shape; `None` in `shape` matches any size.
+    pub fn required(&mut self, key: &str, shape: &[Option<usize>], what: &str) -> Result<Array> {
+        let array = self.numeric(key)?.ok_or_else(|| Error::MissingKey {
+            path: self.path.clone(),
+            key: key.to_string(),
+            what: what.to_string(),
+        })?;
+        self.check_shape(key, &array, shape)?;
+        Ok(array)
+    }
+
+    /// Checks an array's shape against a pattern (`None` = any size in that axis).
+    pub fn check_shape(&self, key: &str, array: &Array, shape: &[Option<usize>]) -> Result<()> {
+        let ok = array.shape.len() == shape.len()
+            && array
+                .shape
+                .iter()
+                .zip(shape)
+                .all(|(&n, want)| want.is_none_or(|w| w == n));
+        if ok {
+            Ok(())
+        } else {
+            let want: Vec<String> = shape
+                .iter()
+                .map(|s| s.map_or("N".to_string(), |n| n.to_string()))
+                .collect();
+            Err(self.bad(
+                key,
+                format!("shape {:?}, expected ({})", array.shape, want.join(", ")),
+            ))
+        }
+    }
+
+    /// Checks that every value of an array is finite.
+    pub fn check_finite(&self, key: &str, array: &Array) -> Result<()> {
+        match array.data.iter().position(|v| !v.is_finite()) {
+            None => Ok(()),
+            Some(i) => Err(self.bad(key, format!("non-finite value at flat index {i}"))),
+        }
+    }
+
+    /// Reads a string array (numpy unicode `<U..` or bytes `|S..`), e.g. AMASS's 0-d `gender`.
+    pub fn strings(&mut self, key: &str) -> Result<Option<Vec<String>>> {
+        let path = self.path.clone();
+        let Some(file) = self.archive.by_name(key).map_err(|e| Error::BadArray {
+            path: path.clone(),
+            key: key.to_string(),
+            problem: e.to_string(),
+        })?
+        else {
+            return Ok(None);
+        };
+        let is_unicode = matches!(file.dtype(), DType::Plain(ref ts) if ts.type_char() == TypeChar::UnicodeStr);
+        let is_bytes = matches!(file.dtype(), DType::Plain(ref ts) if ts.type_char() == TypeChar::ByteStr);
+        let io = |e: std::io::Error| Error::BadArray {
+            path: path.clone(),
+            key: key.to_string(),
+            problem: e.to_string(),
+        };
+        if is_unicode {
+            Ok(Some(file.into_vec::<String>().map_err(io)?))
+        } else if is_bytes {
+            let raw = file.into_vec::<Vec<u8>>().map_err(io)?;
+            Ok(Some(
+                raw.into_iter()
+                    .map(|b| String::from_utf8_lossy(&b).trim_end_matches('\0').to_string())
+                    .collect(),
+            ))
+        } else {
+            Err(Error::BadArray {
+                path,
+                key: key.to_string(),
+                problem: format!("expected a string array, found dtype {}", file.dtype().descr()),
+            })
+        }
+    }
+}
+
+fn bad_array(path: &Path, key: &str, problem: impl Into<String>) -> Error {
+    Error::BadArray {
+        path: path.to_path_buf(),
+        key: key.to_string(),
+        problem: problem.into(),
+    }
+}
+
+/// Integer arrays to f64 (exact below 2^53; SMPL's u32::MAX "no parent" sentinel is exact).
+fn to_f64<T: Copy + TryInto<i128>>(v: Vec<T>) -> Vec<f64> {
+    v.into_iter()
+        .map(|x| x.try_into().map_or(f64::NAN, |i: i128| i as f64))
+        .collect()
+}
