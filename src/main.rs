@@ -1,1 +1,31 @@
-fn main() {}
+//! `dit-garment`: garment dynamics on SMPL-compatible bodies (see README.md).
+//!
+//! Exit codes: 0 success, 1 error (the message names the file and the problem), 2 bad usage.
+
+mod cli;
+mod commands;
+mod inputs;
+mod output;
+mod recording;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let args = cli::Cli::parse();
+    match commands::run(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            // A closed pipe (e.g. `| head`) is not an error.
+            if err.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)) {
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}

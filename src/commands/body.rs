@@ -1,0 +1,60 @@
+//! `dit-garment body`: pose a body and write it as OBJ (and its numbers as JSON).
+
+use anyhow::{Result, bail};
+use motions::{FramePose, POSE_DIM};
+use serde_json::json;
+
+use crate::cli::BodyArgs;
+use crate::inputs::{self, BodyParams};
+use crate::output::{write_json, write_obj};
+
+pub fn run(args: &BodyArgs) -> Result<()> {
+    if args.out.is_none() && args.json.is_none() {
+        bail!("nothing to write: give --out FILE.obj and/or --json FILE");
+    }
+    let model = inputs::body_model(args.model.model.as_deref())?;
+    let params = match &args.params {
+        Some(p) => BodyParams::load(p)?,
+        None => BodyParams::default(),
+    };
+    let shaped = model.shape(&params.betas)?;
+    let mut frame = FramePose { pose: [0.0; POSE_DIM], transl: [0.0; 3] };
+    if let Some(pose) = &params.pose {
+        frame.pose.copy_from_slice(pose);
+    }
+    if let Some(t) = &params.transl {
+        frame.transl.copy_from_slice(t);
+    }
+    if let (Some(source), Some(k)) = (&args.motion, args.frame) {
+        let motion = inputs::motion(source, &model, &shaped)?;
+        let Some(f) = motion.frames.get(k) else {
+            bail!("--frame {k} is past the end of '{source}' ({} frames at 30 fps)", motion.len());
+        };
+        frame = *f;
+    }
+    let posed = model.pose(&shaped, &frame)?;
+    let height = super::height(&shaped.vertices);
+    let boundary = model.boundary_edge_count();
+    if let Some(out) = &args.out {
+        let comment = format!("dit-garment body: model {}, betas {:?}\nmetres, y up, facing +z; vertices in the model's order", model.name(), shaped.betas);
+        write_obj(out, &posed.vertices, model.faces(), &comment)?;
+        println!("wrote {} ({} vertices, {} triangles, rest height {:.3} m, {} boundary edges)", out.display(), model.num_vertices(), model.faces().len(), height, boundary);
+    }
+    if let Some(path) = &args.json {
+        write_json(
+            path,
+            &json!({
+                "vertices": model.num_vertices(),
+                "faces": model.faces().len(),
+                "boundary_edges": boundary,
+                "height_m": height,
+                "posed_height_m": super::height(&posed.vertices),
+                "betas": shaped.betas,
+                "beta_names": model.beta_names(),
+                "joints": posed.joints,
+                "model": model.name(),
+            }),
+        )?;
+    }
+    Ok(())
+}

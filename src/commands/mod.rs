@@ -1,0 +1,24 @@
+//! One module per subcommand; each turns parsed flags into a run.
+
+mod body;
+mod demo;
+mod motions_cmd;
+
+use anyhow::Result;
+
+use crate::cli::{Cli, Command};
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo(args) => demo::run(&args),
+        Command::Body(args) => body::run(&args),
+        Command::Motions { command } => motions_cmd::run(command),
+    }
+}
+
+/// Vertical extent of a vertex set, metres.
+pub fn height(vertices: &[[f64; 3]]) -> f64 {
+    let (lo, hi) = vertices.iter().fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v[1]), hi.max(v[1])));
+    hi - lo
+}

@@ -1,0 +1,66 @@
+//! Turning flags into real objects: the body model, a motion (built-in name or AMASS file), and
+//! body parameter files. Every error names the file or value at fault.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use motions::library::MotionSpec;
+use motions::{BodyModel, Motion, POSE_DIM, ShapedBody};
+use serde::Deserialize;
+
+/// The body model named by `--model`, or the default body.
+pub fn body_model(path: Option<&Path>) -> Result<BodyModel> {
+    match path {
+        Some(p) => Ok(BodyModel::load(p)?),
+        None => Ok(BodyModel::default_body()),
+    }
+}
+
+/// A motion at 30 fps: a built-in name (with optional parameters) generated for `shaped`, or an
+/// AMASS `.npz` file resampled by time.
+pub fn motion(source: &str, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
+    let path = Path::new(source);
+    if source.ends_with(".npz") || path.exists() {
+        let raw = motions::amass::load(path, shaped.joints[0])?;
+        return raw.resample(30.0).with_context(|| format!("resampling {source} to 30 fps"));
+    }
+    Ok(MotionSpec::parse(source)?.generate(model, shaped)?)
+}
+
+/// Body parameters from a `--params` JSON file.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyParams {
+    /// Shape coefficients.
+    #[serde(default)]
+    pub betas: Vec<f64>,
+    /// 72 axis-angle values (radians).
+    #[serde(default)]
+    pub pose: Option<Vec<f64>>,
+    /// Root translation (metres).
+    #[serde(default)]
+    pub transl: Option<Vec<f64>>,
+}
+
+impl BodyParams {
+    /// Reads and checks a params file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let params: Self = serde_json::from_str(&text).with_context(|| format!("{}: not a valid params file", path.display()))?;
+        if let Some(pose) = &params.pose
+            && pose.len() != POSE_DIM
+        {
+            bail!("{}: 'pose' has {} values, expected 72 (global_orient 3 + body_pose 69)", path.display(), pose.len());
+        }
+        if let Some(t) = &params.transl
+            && t.len() != 3
+        {
+            bail!("{}: 'transl' has {} values, expected 3", path.display(), t.len());
+        }
+        let all = params.betas.iter().chain(params.pose.iter().flatten()).chain(params.transl.iter().flatten());
+        if all.clone().any(|v| !v.is_finite()) {
+            bail!("{}: holds a non-finite number", path.display());
+        }
+        Ok(params)
+    }
+}
