@@ -22,7 +22,9 @@ pub fn motion(source: &str, model: &BodyModel, shaped: &ShapedBody) -> Result<Mo
     let path = Path::new(source);
     if source.ends_with(".npz") || path.exists() {
         let raw = motions::amass::load(path, shaped.joints[0])?;
-        return raw.resample(30.0).with_context(|| format!("resampling {source} to 30 fps"));
+        return raw
+            .resample(30.0)
+            .with_context(|| format!("resampling {source} to 30 fps"));
     }
     Ok(MotionSpec::parse(source)?.generate(model, shaped)?)
 }
@@ -45,19 +47,33 @@ pub struct BodyParams {
 impl BodyParams {
     /// Reads and checks a params file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let params: Self = serde_json::from_str(&text).with_context(|| format!("{}: not a valid params file", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let params: Self = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a valid params file", path.display()))?;
         if let Some(pose) = &params.pose
             && pose.len() != POSE_DIM
         {
-            bail!("{}: 'pose' has {} values, expected 72 (global_orient 3 + body_pose 69)", path.display(), pose.len());
+            bail!(
+                "{}: 'pose' has {} values, expected 72 (global_orient 3 + body_pose 69)",
+                path.display(),
+                pose.len()
+            );
         }
         if let Some(t) = &params.transl
             && t.len() != 3
         {
-            bail!("{}: 'transl' has {} values, expected 3", path.display(), t.len());
+            bail!(
+                "{}: 'transl' has {} values, expected 3",
+                path.display(),
+                t.len()
+            );
         }
-        let all = params.betas.iter().chain(params.pose.iter().flatten()).chain(params.transl.iter().flatten());
+        let all = params
+            .betas
+            .iter()
+            .chain(params.pose.iter().flatten())
+            .chain(params.transl.iter().flatten());
         if all.clone().any(|v| !v.is_finite()) {
             bail!("{}: holds a non-finite number", path.display());
         }

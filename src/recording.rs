@@ -47,12 +47,33 @@ pub fn write_body_sequence<W: Write + Seek>(
         .profile("")
         .create(out)?;
     let schema = writer.add_schema("dit_garment.BodyPose", "jsonschema", POSE_SCHEMA.as_bytes())?;
-    let raw = |dtype: &str, shape: String| BTreeMap::from([("dtype".to_string(), dtype.to_string()), ("shape".to_string(), shape), ("byte_order".to_string(), "little".to_string())]);
+    let raw = |dtype: &str, shape: String| {
+        BTreeMap::from([
+            ("dtype".to_string(), dtype.to_string()),
+            ("shape".to_string(), shape),
+            ("byte_order".to_string(), "little".to_string()),
+        ])
+    };
     let nv = model.num_vertices();
     let pose_channel = writer.add_channel(schema, POSE_TOPIC, "json", &BTreeMap::new())?;
-    let vertex_channel = writer.add_channel(0, VERTICES_TOPIC, "application/octet-stream", &raw("float32", format!("[{nv}, 3]")))?;
-    let joint_channel = writer.add_channel(0, JOINTS_TOPIC, "application/octet-stream", &raw("float32", "[24, 3]".to_string()))?;
-    let face_channel = writer.add_channel(0, FACES_TOPIC, "application/octet-stream", &raw("uint32", format!("[{}, 3]", model.faces().len())))?;
+    let vertex_channel = writer.add_channel(
+        0,
+        VERTICES_TOPIC,
+        "application/octet-stream",
+        &raw("float32", format!("[{nv}, 3]")),
+    )?;
+    let joint_channel = writer.add_channel(
+        0,
+        JOINTS_TOPIC,
+        "application/octet-stream",
+        &raw("float32", "[24, 3]".to_string()),
+    )?;
+    let face_channel = writer.add_channel(
+        0,
+        FACES_TOPIC,
+        "application/octet-stream",
+        &raw("uint32", format!("[{}, 3]", model.faces().len())),
+    )?;
 
     let mut info = BTreeMap::from([
         ("motion".to_string(), motion.name.clone()),
@@ -60,21 +81,54 @@ pub fn write_body_sequence<W: Write + Seek>(
         ("frames".to_string(), motion.len().to_string()),
         ("body_model".to_string(), model.name().to_string()),
         ("betas".to_string(), serde_json::to_string(&shaped.betas)?),
-        ("units".to_string(), "metres, seconds, radians; y up".to_string()),
-        ("software".to_string(), format!("dit-garment {}", env!("CARGO_PKG_VERSION"))),
+        (
+            "units".to_string(),
+            "metres, seconds, radians; y up".to_string(),
+        ),
+        (
+            "software".to_string(),
+            format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
+        ),
     ]);
     info.extend(extra.clone());
-    writer.write_metadata(&Metadata { name: "sequence".to_string(), metadata: info })?;
+    writer.write_metadata(&Metadata {
+        name: "sequence".to_string(),
+        metadata: info,
+    })?;
 
-    let faces: Vec<u8> = model.faces().iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
-    writer.write_to_known_channel(&MessageHeader { channel_id: face_channel, sequence: 0, log_time: 0, publish_time: 0 }, &faces)?;
+    let faces: Vec<u8> = model
+        .faces()
+        .iter()
+        .flatten()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    writer.write_to_known_channel(
+        &MessageHeader {
+            channel_id: face_channel,
+            sequence: 0,
+            log_time: 0,
+            publish_time: 0,
+        },
+        &faces,
+    )?;
     for (k, (frame, body)) in motion.frames.iter().zip(posed).enumerate() {
         let time_ns = (k as f64 / motion.fps * 1e9).round() as u64;
-        let header = |channel_id| MessageHeader { channel_id, sequence: k as u32, log_time: time_ns, publish_time: time_ns };
+        let header = |channel_id| MessageHeader {
+            channel_id,
+            sequence: k as u32,
+            log_time: time_ns,
+            publish_time: time_ns,
+        };
         let pose = json!({"frame": k, "time_s": k as f64 / motion.fps, "pose": frame.pose.to_vec(), "transl": frame.transl});
         writer.write_to_known_channel(&header(pose_channel), &serde_json::to_vec(&pose)?)?;
-        writer.write_to_known_channel(&header(vertex_channel), &f32_bytes(body.vertices.iter().flatten()))?;
-        writer.write_to_known_channel(&header(joint_channel), &f32_bytes(body.joints.iter().flatten()))?;
+        writer.write_to_known_channel(
+            &header(vertex_channel),
+            &f32_bytes(body.vertices.iter().flatten()),
+        )?;
+        writer.write_to_known_channel(
+            &header(joint_channel),
+            &f32_bytes(body.joints.iter().flatten()),
+        )?;
     }
     writer.finish()?;
     Ok(())

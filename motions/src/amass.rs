@@ -24,7 +24,11 @@ use crate::skeleton::POSE_DIM;
 /// rest pelvis joint of the shaped body that will wear the motion.
 pub fn load(path: &Path, pelvis_rest: [f64; 3]) -> Result<Motion> {
     let mut npz = Npz::open(path)?;
-    let bad = |key: &str, problem: String| Error::BadArray { path: path.to_path_buf(), key: key.to_string(), problem };
+    let bad = |key: &str, problem: String| Error::BadArray {
+        path: path.to_path_buf(),
+        key: key.to_string(),
+        problem,
+    };
 
     let fps_array = match npz.numeric("mocap_framerate")? {
         Some(a) => a,
@@ -36,33 +40,76 @@ pub fn load(path: &Path, pelvis_rest: [f64; 3]) -> Result<Motion> {
     };
     let fps = match fps_array.data.as_slice() {
         [v] if v.is_finite() && *v > 0.0 => *v,
-        other => return Err(bad("mocap_framerate", format!("frame rate must be one positive number, found {other:?}"))),
+        other => {
+            return Err(bad(
+                "mocap_framerate",
+                format!("frame rate must be one positive number, found {other:?}"),
+            ));
+        }
     };
 
     // Root and body rotations, N x 66.
     let (count, body): (usize, Vec<f64>) = if let Some(poses) = npz.numeric("poses")? {
         if poses.shape.len() != 2 || poses.shape[1] < 66 {
-            return Err(bad("poses", format!("shape {:?}, expected (N, 156) for SMPL+H or (N, 165) for SMPL-X", poses.shape)));
+            return Err(bad(
+                "poses",
+                format!(
+                    "shape {:?}, expected (N, 156) for SMPL+H or (N, 165) for SMPL-X",
+                    poses.shape
+                ),
+            ));
         }
         let (n, w) = (poses.shape[0], poses.shape[1]);
-        (n, (0..n).flat_map(|i| poses.data[i * w..i * w + 66].to_vec()).collect())
+        (
+            n,
+            (0..n)
+                .flat_map(|i| poses.data[i * w..i * w + 66].to_vec())
+                .collect(),
+        )
     } else {
-        let root = npz.required("root_orient", &[None, Some(3)], "root orientation, N x 3 (or 'poses')")?;
+        let root = npz.required(
+            "root_orient",
+            &[None, Some(3)],
+            "root orientation, N x 3 (or 'poses')",
+        )?;
         let n = root.shape[0];
         let body = npz.required("pose_body", &[Some(n), Some(63)], "body pose, N x 63")?;
-        (n, (0..n).flat_map(|i| root.data[i * 3..i * 3 + 3].iter().chain(&body.data[i * 63..i * 63 + 63]).copied().collect::<Vec<_>>()).collect())
+        (
+            n,
+            (0..n)
+                .flat_map(|i| {
+                    root.data[i * 3..i * 3 + 3]
+                        .iter()
+                        .chain(&body.data[i * 63..i * 63 + 63])
+                        .copied()
+                        .collect::<Vec<_>>()
+                })
+                .collect(),
+        )
     };
     if count == 0 {
         return Err(bad("poses", "the sequence is empty (0 frames)".into()));
     }
-    let trans = npz.required("trans", &[Some(count), Some(3)], "root translation, N x 3, metres")?;
-    let pose_array = crate::npz::Array { shape: vec![count, 66], data: body };
+    let trans = npz.required(
+        "trans",
+        &[Some(count), Some(3)],
+        "root translation, N x 3, metres",
+    )?;
+    let pose_array = crate::npz::Array {
+        shape: vec![count, 66],
+        data: body,
+    };
     npz.check_finite("poses", &pose_array)?;
     npz.check_finite("trans", &trans)?;
     let betas = npz.numeric("betas")?.map(|b| b.data);
-    let gender = if npz.has("gender") { npz.strings("gender")?.and_then(|g| g.into_iter().next()) } else { None };
+    let gender = if npz.has("gender") {
+        npz.strings("gender")?.and_then(|g| g.into_iter().next())
+    } else {
+        None
+    };
 
-    let z_up_to_y_up = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2);
+    let z_up_to_y_up =
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2);
     let j0 = Vector3::from(pelvis_rest);
     let frames = (0..count)
         .map(|i| {
@@ -71,9 +118,16 @@ pub fn load(path: &Path, pelvis_rest: [f64; 3]) -> Result<Motion> {
             pose[..66].copy_from_slice(src);
             let root = z_up_to_y_up * axis_angle_to_quat([src[0], src[1], src[2]]);
             pose[..3].copy_from_slice(&quat_to_axis_angle(&root));
-            let t = Vector3::new(trans.data[3 * i], trans.data[3 * i + 1], trans.data[3 * i + 2]);
+            let t = Vector3::new(
+                trans.data[3 * i],
+                trans.data[3 * i + 1],
+                trans.data[3 * i + 2],
+            );
             let transl = z_up_to_y_up * (t + j0) - j0;
-            FramePose { pose, transl: transl.into() }
+            FramePose {
+                pose,
+                transl: transl.into(),
+            }
         })
         .collect();
     let mut motion = Motion::new(path.display().to_string(), fps, frames)?;

@@ -59,8 +59,9 @@ pub struct BodyModel {
 impl BodyModel {
     /// The licence-free default body (13,380 vertices, 10 named shape coefficients).
     pub fn default_body() -> Self {
-        let mut model = Self::from_npz_reader(Cursor::new(DEFAULT_BODY_NPZ), Path::new("<default body>"))
-            .expect("the compiled-in default body is valid (checked by tests)");
+        let mut model =
+            Self::from_npz_reader(Cursor::new(DEFAULT_BODY_NPZ), Path::new("<default body>"))
+                .expect("the compiled-in default body is valid (checked by tests)");
         model.name = "default".to_string();
         model
     }
@@ -79,10 +80,18 @@ impl BodyModel {
     }
 
     fn read<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>) -> Result<Self> {
-        let v_template = npz.required("v_template", &[None, Some(3)], "rest vertices, V x 3, metres")?;
+        let v_template = npz.required(
+            "v_template",
+            &[None, Some(3)],
+            "rest vertices, V x 3, metres",
+        )?;
         let nv = v_template.shape[0];
         let f = npz.required("f", &[None, Some(3)], "triangles, F x 3")?;
-        let shapedirs = npz.required("shapedirs", &[Some(nv), Some(3), None], "shape blend shapes, V x 3 x B")?;
+        let shapedirs = npz.required(
+            "shapedirs",
+            &[Some(nv), Some(3), None],
+            "shape blend shapes, V x 3 x B",
+        )?;
         let posedirs = npz.numeric("posedirs")?.ok_or_else(|| Error::MissingKey {
             path: npz.path().to_path_buf(),
             key: "posedirs".into(),
@@ -98,12 +107,28 @@ impl BodyModel {
             }
             t
         } else {
-            npz.check_shape("posedirs", &posedirs, &[Some(nv), Some(3), Some(POSE_FEATURE_DIM)])?;
+            npz.check_shape(
+                "posedirs",
+                &posedirs,
+                &[Some(nv), Some(3), Some(POSE_FEATURE_DIM)],
+            )?;
             posedirs.data
         };
-        let j_regressor = npz.required("J_regressor", &[Some(NUM_JOINTS), Some(nv)], "joint regressor, 24 x V (dense)")?;
-        let weights = npz.required("weights", &[Some(nv), Some(NUM_JOINTS)], "skinning weights, V x 24")?;
-        let kintree = npz.required("kintree_table", &[Some(2), Some(NUM_JOINTS)], "parents (row 0) and joint ids (row 1)")?;
+        let j_regressor = npz.required(
+            "J_regressor",
+            &[Some(NUM_JOINTS), Some(nv)],
+            "joint regressor, 24 x V (dense)",
+        )?;
+        let weights = npz.required(
+            "weights",
+            &[Some(nv), Some(NUM_JOINTS)],
+            "skinning weights, V x 24",
+        )?;
+        let kintree = npz.required(
+            "kintree_table",
+            &[Some(2), Some(NUM_JOINTS)],
+            "parents (row 0) and joint ids (row 1)",
+        )?;
         for (key, a) in [
             ("v_template", &v_template),
             ("shapedirs", &shapedirs),
@@ -128,7 +153,9 @@ impl BodyModel {
                 return Err(Error::BadArray {
                     path: npz.path().to_path_buf(),
                     key: "kintree_table".into(),
-                    problem: format!("joint {j} has parent {p}; parents must precede their children"),
+                    problem: format!(
+                        "joint {j} has parent {p}; parents must precede their children"
+                    ),
                 });
             }
         }
@@ -137,16 +164,28 @@ impl BodyModel {
             .chunks_exact(3)
             .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32])
             .collect::<Vec<_>>();
-        if let Some(bad) = f.data.iter().find(|&&i| !(i >= 0.0 && i < nv as f64 && i.fract() == 0.0)) {
+        if let Some(bad) = f
+            .data
+            .iter()
+            .find(|&&i| !(i >= 0.0 && i < nv as f64 && i.fract() == 0.0))
+        {
             return Err(Error::BadArray {
                 path: npz.path().to_path_buf(),
                 key: "f".into(),
                 problem: format!("vertex index {bad} out of range (V = {nv})"),
             });
         }
-        let beta_names = if npz.has("beta_names") { npz.strings("beta_names")?.unwrap_or_default() } else { Vec::new() };
+        let beta_names = if npz.has("beta_names") {
+            npz.strings("beta_names")?.unwrap_or_default()
+        } else {
+            Vec::new()
+        };
         let arrays = ModelArrays {
-            v_template: v_template.data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            v_template: v_template
+                .data
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
             faces,
             num_betas: shapedirs.shape[2],
             shapedirs: shapedirs.data,
@@ -171,13 +210,46 @@ impl BodyModel {
         let nv = a.v_template.len();
         let check = |ok: bool, msg: String| if ok { Ok(()) } else { Err(Error::Invalid(msg)) };
         check(nv > 0, "the model has no vertices".into())?;
-        check(a.num_betas > 0 && a.shapedirs.len() == nv * 3 * a.num_betas, format!("shapedirs holds {} values, expected V*3*B = {}", a.shapedirs.len(), nv * 3 * a.num_betas))?;
-        check(a.posedirs.len() == nv * 3 * POSE_FEATURE_DIM, format!("posedirs holds {} values, expected V*3*207", a.posedirs.len()))?;
-        check(a.j_regressor.len() == NUM_JOINTS * nv, "J_regressor must be 24 x V".into())?;
-        check(a.weights.len() == nv * NUM_JOINTS, "weights must be V x 24".into())?;
-        check(a.parents[0].is_none() && (1..NUM_JOINTS).all(|j| a.parents[j].is_some_and(|p| p < j)), "parents must precede their children, with joint 0 the root".into())?;
-        check(a.faces.iter().flatten().all(|&i| (i as usize) < nv), "a triangle refers to a vertex that does not exist".into())?;
-        let finite = a.v_template.iter().flatten().chain(&a.shapedirs).chain(&a.posedirs).chain(&a.j_regressor).chain(&a.weights).all(|v| v.is_finite());
+        check(
+            a.num_betas > 0 && a.shapedirs.len() == nv * 3 * a.num_betas,
+            format!(
+                "shapedirs holds {} values, expected V*3*B = {}",
+                a.shapedirs.len(),
+                nv * 3 * a.num_betas
+            ),
+        )?;
+        check(
+            a.posedirs.len() == nv * 3 * POSE_FEATURE_DIM,
+            format!(
+                "posedirs holds {} values, expected V*3*207",
+                a.posedirs.len()
+            ),
+        )?;
+        check(
+            a.j_regressor.len() == NUM_JOINTS * nv,
+            "J_regressor must be 24 x V".into(),
+        )?;
+        check(
+            a.weights.len() == nv * NUM_JOINTS,
+            "weights must be V x 24".into(),
+        )?;
+        check(
+            a.parents[0].is_none() && (1..NUM_JOINTS).all(|j| a.parents[j].is_some_and(|p| p < j)),
+            "parents must precede their children, with joint 0 the root".into(),
+        )?;
+        check(
+            a.faces.iter().flatten().all(|&i| (i as usize) < nv),
+            "a triangle refers to a vertex that does not exist".into(),
+        )?;
+        let finite = a
+            .v_template
+            .iter()
+            .flatten()
+            .chain(&a.shapedirs)
+            .chain(&a.posedirs)
+            .chain(&a.j_regressor)
+            .chain(&a.weights)
+            .all(|v| v.is_finite());
         check(finite, "the model holds non-finite values".into())?;
 
         let mut skin_start = Vec::with_capacity(nv + 1);
@@ -186,8 +258,16 @@ impl BodyModel {
             skin_start.push(skin.len() as u32);
             let row = &a.weights[v * NUM_JOINTS..(v + 1) * NUM_JOINTS];
             let sum: f64 = row.iter().sum();
-            check((sum - 1.0).abs() < 1e-3, format!("skinning weights of vertex {v} sum to {sum}, expected 1"))?;
-            skin.extend(row.iter().enumerate().filter(|(_, w)| **w != 0.0).map(|(j, &w)| (j as u8, w)));
+            check(
+                (sum - 1.0).abs() < 1e-3,
+                format!("skinning weights of vertex {v} sum to {sum}, expected 1"),
+            )?;
+            skin.extend(
+                row.iter()
+                    .enumerate()
+                    .filter(|(_, w)| **w != 0.0)
+                    .map(|(j, &w)| (j as u8, w)),
+            );
         }
         skin_start.push(skin.len() as u32);
         let j_regressor = (0..NUM_JOINTS)

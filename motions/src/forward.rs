@@ -102,12 +102,21 @@ impl BodyModel {
 
     /// World transforms of the joints for one pose (no vertices): the cheap part of the pass,
     /// used where only the skeleton matters (foot planting, pose windows).
-    pub fn joint_transforms(&self, shaped: &ShapedBody, frame: &FramePose) -> [Transform; NUM_JOINTS] {
+    pub fn joint_transforms(
+        &self,
+        shaped: &ShapedBody,
+        frame: &FramePose,
+    ) -> [Transform; NUM_JOINTS] {
         let rotations = local_rotations(&frame.pose);
         self.chain(shaped, &rotations, frame.transl)
     }
 
-    fn chain(&self, shaped: &ShapedBody, rotations: &[Matrix3<f64>; NUM_JOINTS], transl: [f64; 3]) -> [Transform; NUM_JOINTS] {
+    fn chain(
+        &self,
+        shaped: &ShapedBody,
+        rotations: &[Matrix3<f64>; NUM_JOINTS],
+        transl: [f64; 3],
+    ) -> [Transform; NUM_JOINTS] {
         let rest = |j: usize| Vector3::from(shaped.joints[j]);
         let mut g = [Transform {
             rotation: Matrix3::identity(),
@@ -130,8 +139,15 @@ impl BodyModel {
 
     /// Poses a shaped body. Errors on non-finite pose or translation values.
     pub fn pose(&self, shaped: &ShapedBody, frame: &FramePose) -> Result<PosedBody> {
-        if let Some(i) = frame.pose.iter().chain(&frame.transl).position(|v| !v.is_finite()) {
-            return Err(Error::Invalid(format!("pose/translation value {i} is not finite")));
+        if let Some(i) = frame
+            .pose
+            .iter()
+            .chain(&frame.transl)
+            .position(|v| !v.is_finite())
+        {
+            return Err(Error::Invalid(format!(
+                "pose/translation value {i} is not finite"
+            )));
         }
         let rotations = local_rotations(&frame.pose);
         let g = self.chain(shaped, &rotations, frame.transl);
@@ -146,7 +162,8 @@ impl BodyModel {
                 let mut rest = Vector3::from(shaped.vertices[v]);
                 if let (Some(posedirs), Some(feature)) = (&self.posedirs, &feature) {
                     for c in 0..3 {
-                        let dirs = &posedirs[(v * 3 + c) * POSE_FEATURE_DIM..(v * 3 + c + 1) * POSE_FEATURE_DIM];
+                        let dirs = &posedirs
+                            [(v * 3 + c) * POSE_FEATURE_DIM..(v * 3 + c + 1) * POSE_FEATURE_DIM];
                         rest[c] += dirs.iter().zip(feature).map(|(d, f)| d * f).sum::<f64>();
                     }
                 }

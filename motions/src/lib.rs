@@ -25,4 +25,6 @@ pub use body_model::{BodyModel, ModelArrays, boundary_edges};
 pub use error::{Error, Result};
 pub use forward::{FramePose, PosedBody, ShapedBody, Transform};
 pub use motion::{BlendIn, Motion, PoseWindow, canonical_a_pose};
-pub use skeleton::{JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index};
+pub use skeleton::{
+    JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index,
+};

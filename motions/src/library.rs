@@ -34,16 +34,56 @@ pub struct MotionInfo {
 
 /// The built-in motions.
 pub const MOTIONS: [MotionInfo; 10] = [
-    MotionInfo { name: "walk", description: "walking forward at about 1 m/s, arms swinging", default_duration: 4.0 },
-    MotionInfo { name: "run", description: "jogging forward, trunk leaning, elbows bent", default_duration: 3.0 },
-    MotionInfo { name: "jumping_jacks", description: "jumping jacks: arms overhead and legs apart, with hops", default_duration: 4.0 },
-    MotionInfo { name: "arm_raise", description: "both arms raised sideways overhead and lowered", default_duration: 6.0 },
-    MotionInfo { name: "arm_swing", description: "arms swinging forward and back in opposition", default_duration: 4.0 },
-    MotionInfo { name: "squat", description: "deep squats with arms reaching forward", default_duration: 6.0 },
-    MotionInfo { name: "torso_twist", description: "upper body twisting left and right, elbows bent", default_duration: 5.0 },
-    MotionInfo { name: "turn", description: "stepping in place while turning left (90 deg/s)", default_duration: 4.0 },
-    MotionInfo { name: "kick", description: "front kicks with the right leg, arms on guard", default_duration: 4.0 },
-    MotionInfo { name: "sway", description: "dance-like side-to-side sway with knee bounce and arm sway", default_duration: 6.0 },
+    MotionInfo {
+        name: "walk",
+        description: "walking forward at about 1 m/s, arms swinging",
+        default_duration: 4.0,
+    },
+    MotionInfo {
+        name: "run",
+        description: "jogging forward, trunk leaning, elbows bent",
+        default_duration: 3.0,
+    },
+    MotionInfo {
+        name: "jumping_jacks",
+        description: "jumping jacks: arms overhead and legs apart, with hops",
+        default_duration: 4.0,
+    },
+    MotionInfo {
+        name: "arm_raise",
+        description: "both arms raised sideways overhead and lowered",
+        default_duration: 6.0,
+    },
+    MotionInfo {
+        name: "arm_swing",
+        description: "arms swinging forward and back in opposition",
+        default_duration: 4.0,
+    },
+    MotionInfo {
+        name: "squat",
+        description: "deep squats with arms reaching forward",
+        default_duration: 6.0,
+    },
+    MotionInfo {
+        name: "torso_twist",
+        description: "upper body twisting left and right, elbows bent",
+        default_duration: 5.0,
+    },
+    MotionInfo {
+        name: "turn",
+        description: "stepping in place while turning left (90 deg/s)",
+        default_duration: 4.0,
+    },
+    MotionInfo {
+        name: "kick",
+        description: "front kicks with the right leg, arms on guard",
+        default_duration: 4.0,
+    },
+    MotionInfo {
+        name: "sway",
+        description: "dance-like side-to-side sway with knee bounce and arm sway",
+        default_duration: 6.0,
+    },
 ];
 
 /// A parsed motion request: a library name and its parameters.
@@ -63,20 +103,37 @@ impl MotionSpec {
     /// Parses `NAME` or `NAME:speed=1.2,amplitude=0.8,duration=5`.
     pub fn parse(text: &str) -> Result<Self> {
         let (name, params) = text.split_once(':').unwrap_or((text, ""));
-        let unknown = |reason: String| Error::UnknownMotion { name: text.to_string(), reason };
+        let unknown = |reason: String| Error::UnknownMotion {
+            name: text.to_string(),
+            reason,
+        };
         let info = find(name).ok_or_else(|| {
             let names: Vec<&str> = MOTIONS.iter().map(|m| m.name).collect();
             unknown(format!("built-in motions are {}", names.join(", ")))
         })?;
-        let mut spec = Self { name: info.name.to_string(), speed: 1.0, amplitude: 1.0, duration: info.default_duration };
+        let mut spec = Self {
+            name: info.name.to_string(),
+            speed: 1.0,
+            amplitude: 1.0,
+            duration: info.default_duration,
+        };
         for kv in params.split(',').filter(|s| !s.trim().is_empty()) {
-            let (k, v) = kv.split_once('=').ok_or_else(|| unknown(format!("'{kv}' is not key=value")))?;
-            let value: f64 = v.trim().parse().map_err(|_| unknown(format!("'{v}' is not a number")))?;
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| unknown(format!("'{kv}' is not key=value")))?;
+            let value: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| unknown(format!("'{v}' is not a number")))?;
             let (slot, lo, hi) = match k.trim() {
                 "speed" => (&mut spec.speed, 0.25, 3.0),
                 "amplitude" => (&mut spec.amplitude, 0.0, 1.5),
                 "duration" => (&mut spec.duration, 1.0 / OUTPUT_FPS, 600.0),
-                other => return Err(unknown(format!("unknown parameter '{other}' (speed, amplitude, duration)"))),
+                other => {
+                    return Err(unknown(format!(
+                        "unknown parameter '{other}' (speed, amplitude, duration)"
+                    )));
+                }
             };
             if !(value.is_finite() && value >= lo && value <= hi) {
                 return Err(unknown(format!("{k} = {value} is outside [{lo}, {hi}]")));
@@ -99,7 +156,11 @@ impl MotionSpec {
         if self.duration != info.default_duration {
             parts.push(format!("duration={}", self.duration));
         }
-        if parts.is_empty() { self.name.clone() } else { format!("{}:{}", self.name, parts.join(",")) }
+        if parts.is_empty() {
+            self.name.clone()
+        } else {
+            format!("{}:{}", self.name, parts.join(","))
+        }
     }
 
     /// Generates the motion at 30 fps for a body, planting the feet of that skeleton.
@@ -109,8 +170,17 @@ impl MotionSpec {
             .map(|k| {
                 let t = k as f64 / OUTPUT_FPS;
                 let mut b = PoseBuilder::default();
-                let lift = joint_angles(&self.name, t, self.speed, self.amplitude * ease_in(t), &mut b);
-                FramePose { pose: b.pose(), transl: [0.0, lift, 0.0] }
+                let lift = joint_angles(
+                    &self.name,
+                    t,
+                    self.speed,
+                    self.amplitude * ease_in(t),
+                    &mut b,
+                );
+                FramePose {
+                    pose: b.pose(),
+                    transl: [0.0, lift, 0.0],
+                }
             })
             .collect();
         let frames = plant_feet(model, shaped, frames);
@@ -131,7 +201,9 @@ struct PoseBuilder {
 
 impl Default for PoseBuilder {
     fn default() -> Self {
-        Self { rotations: [UnitQuaternion::identity(); NUM_JOINTS] }
+        Self {
+            rotations: [UnitQuaternion::identity(); NUM_JOINTS],
+        }
     }
 }
 
@@ -142,7 +214,8 @@ impl PoseBuilder {
             Axis::Y => Vector3::y_axis(),
             Axis::Z => Vector3::z_axis(),
         };
-        self.rotations[joint] = UnitQuaternion::from_axis_angle(&axis, degrees.to_radians()) * self.rotations[joint];
+        self.rotations[joint] =
+            UnitQuaternion::from_axis_angle(&axis, degrees.to_radians()) * self.rotations[joint];
         self
     }
 
@@ -152,7 +225,9 @@ impl PoseBuilder {
             Side::Left => (1, 4, 7),
             Side::Right => (2, 5, 8),
         };
-        self.turn(hip, Axis::X, -hip_flex).turn(knee, Axis::X, knee_flex).turn(ankle, Axis::X, -ankle_dorsi);
+        self.turn(hip, Axis::X, -hip_flex)
+            .turn(knee, Axis::X, knee_flex)
+            .turn(ankle, Axis::X, -ankle_dorsi);
     }
 
     /// Places an arm: `down` degrees below horizontal, `forward` degrees of swing to the front,
@@ -162,7 +237,9 @@ impl PoseBuilder {
             Side::Left => (16, 18, 1.0),
             Side::Right => (17, 19, -1.0),
         };
-        self.turn(shoulder, Axis::Z, -s * down).turn(shoulder, Axis::X, -forward).turn(el, Axis::Y, -s * elbow);
+        self.turn(shoulder, Axis::Z, -s * down)
+            .turn(shoulder, Axis::X, -forward)
+            .turn(el, Axis::Y, -s * elbow);
     }
 
     fn pose(&self) -> [f64; POSE_DIM] {
@@ -213,20 +290,54 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
     match name {
         "walk" => {
             let p = phase(0.9);
-            b.leg(Side::Left, a * (5.0 + 22.0 * p.sin()), a * (5.0 + 55.0 * bump(p + 1.0)), a * 10.0 * bump(p + 1.0));
-            b.leg(Side::Right, a * (5.0 - 22.0 * p.sin()), a * (5.0 + 55.0 * bump(p + 1.0 + PI)), a * 10.0 * bump(p + 1.0 + PI));
-            b.arm(Side::Left, 70.0, -a * 15.0 * p.sin(), 15.0 + a * 10.0 * rise(p + PI));
-            b.arm(Side::Right, 70.0, a * 15.0 * p.sin(), 15.0 + a * 10.0 * rise(p));
-            b.turn(0, Axis::Y, a * 4.0 * p.sin()).turn(3, Axis::Y, -a * 3.0 * p.sin()).turn(6, Axis::Y, -a * 2.0 * p.sin());
+            b.leg(
+                Side::Left,
+                a * (5.0 + 22.0 * p.sin()),
+                a * (5.0 + 55.0 * bump(p + 1.0)),
+                a * 10.0 * bump(p + 1.0),
+            );
+            b.leg(
+                Side::Right,
+                a * (5.0 - 22.0 * p.sin()),
+                a * (5.0 + 55.0 * bump(p + 1.0 + PI)),
+                a * 10.0 * bump(p + 1.0 + PI),
+            );
+            b.arm(
+                Side::Left,
+                70.0,
+                -a * 15.0 * p.sin(),
+                15.0 + a * 10.0 * rise(p + PI),
+            );
+            b.arm(
+                Side::Right,
+                70.0,
+                a * 15.0 * p.sin(),
+                15.0 + a * 10.0 * rise(p),
+            );
+            b.turn(0, Axis::Y, a * 4.0 * p.sin())
+                .turn(3, Axis::Y, -a * 3.0 * p.sin())
+                .turn(6, Axis::Y, -a * 2.0 * p.sin());
             0.0
         }
         "run" => {
             let p = phase(1.25);
-            b.leg(Side::Left, a * (15.0 + 28.0 * p.sin()), a * (15.0 + 75.0 * bump(p + 1.0)), a * 10.0 * bump(p + 1.0));
-            b.leg(Side::Right, a * (15.0 - 28.0 * p.sin()), a * (15.0 + 75.0 * bump(p + 1.0 + PI)), a * 10.0 * bump(p + 1.0 + PI));
+            b.leg(
+                Side::Left,
+                a * (15.0 + 28.0 * p.sin()),
+                a * (15.0 + 75.0 * bump(p + 1.0)),
+                a * 10.0 * bump(p + 1.0),
+            );
+            b.leg(
+                Side::Right,
+                a * (15.0 - 28.0 * p.sin()),
+                a * (15.0 + 75.0 * bump(p + 1.0 + PI)),
+                a * 10.0 * bump(p + 1.0 + PI),
+            );
             b.arm(Side::Left, 70.0, -a * 30.0 * p.sin(), 80.0);
             b.arm(Side::Right, 70.0, a * 30.0 * p.sin(), 80.0);
-            b.turn(3, Axis::X, a * 8.0).turn(3, Axis::Y, -a * 5.0 * p.sin()).turn(12, Axis::X, -a * 6.0);
+            b.turn(3, Axis::X, a * 8.0)
+                .turn(3, Axis::Y, -a * 5.0 * p.sin())
+                .turn(12, Axis::X, -a * 6.0);
             0.0
         }
         "jumping_jacks" => {
@@ -234,8 +345,10 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
             let open = rise(p);
             b.arm(Side::Left, 70.0 - a * 145.0 * open, 0.0, 10.0);
             b.arm(Side::Right, 70.0 - a * 145.0 * open, 0.0, 10.0);
-            b.turn(1, Axis::Z, a * 15.0 * open).turn(2, Axis::Z, -a * 15.0 * open);
-            b.turn(7, Axis::Z, -a * 15.0 * open).turn(8, Axis::Z, a * 15.0 * open);
+            b.turn(1, Axis::Z, a * 15.0 * open)
+                .turn(2, Axis::Z, -a * 15.0 * open);
+            b.turn(7, Axis::Z, -a * 15.0 * open)
+                .turn(8, Axis::Z, a * 15.0 * open);
             b.leg(Side::Left, 0.0, a * 10.0 * p.sin().powi(2), 0.0);
             b.leg(Side::Right, 0.0, a * 10.0 * p.sin().powi(2), 0.0);
             a * 0.06 * p.sin().powi(2)
@@ -260,14 +373,19 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
             // Foot flat: ankle dorsiflexion = knee flexion - hip flexion.
             b.leg(Side::Left, 95.0 * d, 115.0 * d, 20.0 * d);
             b.leg(Side::Right, 95.0 * d, 115.0 * d, 20.0 * d);
-            b.turn(3, Axis::X, 25.0 * d).turn(6, Axis::X, 10.0 * d).turn(12, Axis::X, -20.0 * d);
+            b.turn(3, Axis::X, 25.0 * d)
+                .turn(6, Axis::X, 10.0 * d)
+                .turn(12, Axis::X, -20.0 * d);
             b.arm(Side::Left, 70.0, 75.0 * d, 10.0);
             b.arm(Side::Right, 70.0, 75.0 * d, 10.0);
             0.0
         }
         "torso_twist" => {
             let s = a * phase(0.4).sin();
-            b.turn(3, Axis::Y, 12.0 * s).turn(6, Axis::Y, 12.0 * s).turn(9, Axis::Y, 10.0 * s).turn(12, Axis::Y, -6.0 * s);
+            b.turn(3, Axis::Y, 12.0 * s)
+                .turn(6, Axis::Y, 12.0 * s)
+                .turn(9, Axis::Y, 10.0 * s)
+                .turn(12, Axis::Y, -6.0 * s);
             b.arm(Side::Left, 55.0, 20.0, 70.0);
             b.arm(Side::Right, 55.0, 20.0, 70.0);
             0.0
@@ -275,15 +393,30 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
         "turn" => {
             let p = phase(1.2);
             b.turn(0, Axis::Y, 90.0 * speed * t);
-            b.leg(Side::Left, a * 25.0 * bump(p), a * 45.0 * bump(p), a * 10.0 * bump(p));
-            b.leg(Side::Right, a * 25.0 * bump(p + PI), a * 45.0 * bump(p + PI), a * 10.0 * bump(p + PI));
+            b.leg(
+                Side::Left,
+                a * 25.0 * bump(p),
+                a * 45.0 * bump(p),
+                a * 10.0 * bump(p),
+            );
+            b.leg(
+                Side::Right,
+                a * 25.0 * bump(p + PI),
+                a * 45.0 * bump(p + PI),
+                a * 10.0 * bump(p + PI),
+            );
             b.arm(Side::Left, 70.0, 0.0, 20.0);
             b.arm(Side::Right, 70.0, 0.0, 20.0);
             0.0
         }
         "kick" => {
             let k = rise(phase(0.5)).powi(2);
-            b.leg(Side::Right, a * 75.0 * k, a * 70.0 * 4.0 * k * (1.0 - k), -a * 20.0 * k);
+            b.leg(
+                Side::Right,
+                a * 75.0 * k,
+                a * 70.0 * 4.0 * k * (1.0 - k),
+                -a * 20.0 * k,
+            );
             b.leg(Side::Left, a * 5.0 * k, a * 10.0 * k, a * 5.0 * k);
             b.turn(3, Axis::X, -a * 10.0 * k);
             b.arm(Side::Left, 60.0, 30.0, 100.0);
@@ -293,11 +426,16 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
         "sway" => {
             let p = phase(0.5);
             let side = a * p.sin();
-            b.turn(1, Axis::Z, 6.0 * side).turn(2, Axis::Z, 6.0 * side).turn(7, Axis::Z, -6.0 * side).turn(8, Axis::Z, -6.0 * side);
+            b.turn(1, Axis::Z, 6.0 * side)
+                .turn(2, Axis::Z, 6.0 * side)
+                .turn(7, Axis::Z, -6.0 * side)
+                .turn(8, Axis::Z, -6.0 * side);
             let bounce = a * 10.0 * rise(2.0 * p);
             b.leg(Side::Left, bounce / 2.0, bounce, bounce / 2.0);
             b.leg(Side::Right, bounce / 2.0, bounce, bounce / 2.0);
-            b.turn(3, Axis::Z, -5.0 * side).turn(6, Axis::Z, -4.0 * side).turn(15, Axis::Z, 4.0 * side);
+            b.turn(3, Axis::Z, -5.0 * side)
+                .turn(6, Axis::Z, -4.0 * side)
+                .turn(15, Axis::Z, 4.0 * side);
             b.arm(Side::Left, 65.0 - 10.0 * side, 15.0 * side, 30.0);
             b.arm(Side::Right, 65.0 + 10.0 * side, -15.0 * side, 30.0);
             0.0
@@ -318,9 +456,19 @@ const VELOCITY_SMOOTHING_FRAMES: f64 = 5.0;
 /// translation (hops) is added on top. The root velocity is smoothed over about a sixth of a
 /// second, so stance changes do not jerk the body (at the cost of a few millimetres of slip
 /// around touch-down).
-pub fn plant_feet(model: &BodyModel, shaped: &ShapedBody, frames: Vec<FramePose>) -> Vec<FramePose> {
+pub fn plant_feet(
+    model: &BodyModel,
+    shaped: &ShapedBody,
+    frames: Vec<FramePose>,
+) -> Vec<FramePose> {
     let feet = |f: &FramePose| {
-        let g = model.joint_transforms(shaped, &FramePose { pose: f.pose, transl: [0.0; 3] });
+        let g = model.joint_transforms(
+            shaped,
+            &FramePose {
+                pose: f.pose,
+                transl: [0.0; 3],
+            },
+        );
         let side = |ankle: usize, ball: usize| {
             let (a, b) = (g[ankle].translation, g[ball].translation);
             let low = if a.y < b.y { a } else { b };
@@ -330,7 +478,8 @@ pub fn plant_feet(model: &BodyModel, shaped: &ShapedBody, frames: Vec<FramePose>
     };
     let soft_min = |l: f64, r: f64| {
         let m = l.min(r);
-        m - STANCE_SOFTNESS * ((-(l - m) / STANCE_SOFTNESS).exp() + (-(r - m) / STANCE_SOFTNESS).exp()).ln()
+        m - STANCE_SOFTNESS
+            * ((-(l - m) / STANCE_SOFTNESS).exp() + (-(r - m) / STANCE_SOFTNESS).exp()).ln()
     };
     // Per frame: the root's step that keeps the stance foot still (horizontal) and the lower
     // foot at its first-frame height (vertical).
@@ -366,7 +515,10 @@ pub fn plant_feet(model: &BodyModel, shaped: &ShapedBody, frames: Vec<FramePose>
                 root[c] += sum[c] / norm;
             }
         }
-        out.push(FramePose { pose: f.pose, transl: [root[0], root[1] + f.transl[1], root[2]] });
+        out.push(FramePose {
+            pose: f.pose,
+            transl: [root[0], root[1] + f.transl[1], root[2]],
+        });
     }
     out
 }

@@ -80,7 +80,9 @@ impl Motion {
     pub fn new(name: impl Into<String>, fps: f64, frames: Vec<FramePose>) -> Result<Self> {
         let name = name.into();
         if !(fps.is_finite() && fps > 0.0) {
-            return Err(Error::Invalid(format!("motion '{name}': frame rate {fps} is not a positive number")));
+            return Err(Error::Invalid(format!(
+                "motion '{name}': frame rate {fps} is not a positive number"
+            )));
         }
         if frames.is_empty() {
             return Err(Error::Invalid(format!("motion '{name}' has no frames")));
@@ -89,7 +91,9 @@ impl Motion {
             .iter()
             .position(|f| f.pose.iter().chain(&f.transl).any(|v| !v.is_finite()))
         {
-            return Err(Error::Invalid(format!("motion '{name}': frame {k} holds a non-finite value")));
+            return Err(Error::Invalid(format!(
+                "motion '{name}': frame {k} holds a non-finite value"
+            )));
         }
         Ok(Self {
             name,
@@ -121,7 +125,9 @@ impl Motion {
     /// (60, 100, 120, 250 fps ...), multiple of the target or not.
     pub fn resample(&self, fps: f64) -> Result<Motion> {
         if !(fps.is_finite() && fps > 0.0) {
-            return Err(Error::Invalid(format!("target frame rate {fps} is not a positive number")));
+            return Err(Error::Invalid(format!(
+                "target frame rate {fps} is not a positive number"
+            )));
         }
         if (fps - self.fps).abs() < 1e-9 {
             return Ok(self.clone());
@@ -177,7 +183,10 @@ impl Motion {
     /// to and which way it faces are factored out.
     pub fn pose_window(&self, t: usize, l: usize) -> Result<PoseWindow> {
         if t >= self.len() {
-            return Err(Error::Invalid(format!("frame {t} is past the motion's {} frames", self.len())));
+            return Err(Error::Invalid(format!(
+                "frame {t} is past the motion's {} frames",
+                self.len()
+            )));
         }
         let current = &self.frames[t];
         let heading = heading_of(&current.pose);
@@ -257,7 +266,12 @@ mod tests {
             assert_eq!(m.len(), 61, "source {fps} fps");
             for (k, f) in m.frames.iter().enumerate() {
                 let t = k as f64 / OUTPUT_FPS;
-                assert!((f.pose[1] - 0.8 * t).abs() < 1e-9, "{fps} fps, frame {k}: root {} vs {}", f.pose[1], 0.8 * t);
+                assert!(
+                    (f.pose[1] - 0.8 * t).abs() < 1e-9,
+                    "{fps} fps, frame {k}: root {} vs {}",
+                    f.pose[1],
+                    0.8 * t
+                );
                 assert!((f.transl[0] - t).abs() < 1e-9);
                 // The elbow angle is a sine: linear-in-angle interpolation errs by O(h^2).
                 assert!((f.pose[54] - 0.5 * (2.0 * t).sin()).abs() < 1e-3);
@@ -268,7 +282,13 @@ mod tests {
     #[test]
     fn blend_in_starts_at_the_canonical_pose_and_reaches_the_first_frame() {
         let m = constant_turn(30.0, 1.0, 0.5);
-        let b = m.with_blend_in(&canonical_a_pose(), BlendIn { blend_frames: 10, settle_frames: 5 });
+        let b = m.with_blend_in(
+            &canonical_a_pose(),
+            BlendIn {
+                blend_frames: 10,
+                settle_frames: 5,
+            },
+        );
         assert_eq!(b.len(), m.len() + 15);
         assert_eq!(b.frames[0].pose, canonical_a_pose());
         assert_eq!(b.frames[10], m.frames[0]);
@@ -282,18 +302,32 @@ mod tests {
         let w = m.pose_window(40, 3).unwrap();
         assert_eq!(w.poses.len(), 4);
         let last = w.poses.last().unwrap();
-        assert!(last[..3].iter().all(|v| v.abs() < 1e-12), "current root not canonical: {:?}", &last[..3]);
+        assert!(
+            last[..3].iter().all(|v| v.abs() < 1e-12),
+            "current root not canonical: {:?}",
+            &last[..3]
+        );
         assert!(w.transl.last().unwrap().iter().all(|v| v.abs() < 1e-12));
         // The previous frame turned 0.9/30 rad less.
-        assert!((w.poses[2][1] + 0.9 / 30.0).abs() < 1e-9, "previous root {:?}", &w.poses[2][..3]);
+        assert!(
+            (w.poses[2][1] + 0.9 / 30.0).abs() < 1e-9,
+            "previous root {:?}",
+            &w.poses[2][..3]
+        );
         let early = m.pose_window(1, 3).unwrap();
-        assert_eq!(early.poses[0], early.poses[1], "frames before 0 repeat frame 0");
+        assert_eq!(
+            early.poses[0], early.poses[1],
+            "frames before 0 repeat frame 0"
+        );
     }
 
     #[test]
     fn empty_or_bad_rate_is_rejected() {
         assert!(Motion::new("x", 30.0, vec![]).is_err());
-        let f = FramePose { pose: [0.0; POSE_DIM], transl: [0.0; 3] };
+        let f = FramePose {
+            pose: [0.0; POSE_DIM],
+            transl: [0.0; 3],
+        };
         assert!(Motion::new("x", 0.0, vec![f]).is_err());
         assert!(Motion::new("x", f64::NAN, vec![f]).is_err());
     }

@@ -132,7 +132,11 @@ impl<R: Read + Seek> Npz<R> {
                 ));
             }
             _ => {
-                return Err(bad_array(&path, key, format!("unsupported dtype '{ts}' (expected numbers)")));
+                return Err(bad_array(
+                    &path,
+                    key,
+                    format!("unsupported dtype '{ts}' (expected numbers)"),
+                ));
             }
         };
         let expected: usize = shape.iter().product();
@@ -194,8 +198,10 @@ impl<R: Read + Seek> Npz<R> {
         else {
             return Ok(None);
         };
-        let is_unicode = matches!(file.dtype(), DType::Plain(ref ts) if ts.type_char() == TypeChar::UnicodeStr);
-        let is_bytes = matches!(file.dtype(), DType::Plain(ref ts) if ts.type_char() == TypeChar::ByteStr);
+        let is_unicode =
+            matches!(file.dtype(), DType::Plain(ref ts) if ts.type_char() == TypeChar::UnicodeStr);
+        let is_bytes =
+            matches!(file.dtype(), DType::Plain(ref ts) if ts.type_char() == TypeChar::ByteStr);
         let io = |e: std::io::Error| Error::BadArray {
             path: path.clone(),
             key: key.to_string(),
@@ -207,14 +213,21 @@ impl<R: Read + Seek> Npz<R> {
             let raw = file.into_vec::<Vec<u8>>().map_err(io)?;
             Ok(Some(
                 raw.into_iter()
-                    .map(|b| String::from_utf8_lossy(&b).trim_end_matches('\0').to_string())
+                    .map(|b| {
+                        String::from_utf8_lossy(&b)
+                            .trim_end_matches('\0')
+                            .to_string()
+                    })
                     .collect(),
             ))
         } else {
             Err(Error::BadArray {
                 path,
                 key: key.to_string(),
-                problem: format!("expected a string array, found dtype {}", file.dtype().descr()),
+                problem: format!(
+                    "expected a string array, found dtype {}",
+                    file.dtype().descr()
+                ),
             })
         }
     }

@@ -8,7 +8,10 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 pub fn axis_angle_to_matrix(r: [f64; 3]) -> Matrix3<f64> {
     let t2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
     let (a, b) = if t2 < 1e-8 {
-        (1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0)
+        (
+            1.0 - t2 / 6.0 + t2 * t2 / 120.0,
+            0.5 - t2 / 24.0 + t2 * t2 / 720.0,
+        )
     } else {
         let t = t2.sqrt();
         (t.sin() / t, (1.0 - t.cos()) / t2)
@@ -29,7 +32,11 @@ pub fn quat_to_axis_angle(q: &UnitQuaternion<f64>) -> [f64; 3] {
 
 /// Spherical interpolation on the shorter arc: `b` is negated first if it lies in the other
 /// hemisphere (q and -q are the same rotation, and mocap data flips between them).
-pub fn slerp_shortest(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>, t: f64) -> UnitQuaternion<f64> {
+pub fn slerp_shortest(
+    a: &UnitQuaternion<f64>,
+    b: &UnitQuaternion<f64>,
+    t: f64,
+) -> UnitQuaternion<f64> {
     let b = if a.coords.dot(&b.coords) < 0.0 {
         UnitQuaternion::new_unchecked(-b.into_inner())
     } else {
@@ -41,7 +48,11 @@ pub fn slerp_shortest(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>, t: f64) 
 
 /// Interpolates two axis-angle vectors joint by joint (slerp, shorter arc).
 pub fn slerp_axis_angle(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    quat_to_axis_angle(&slerp_shortest(&axis_angle_to_quat(a), &axis_angle_to_quat(b), t))
+    quat_to_axis_angle(&slerp_shortest(
+        &axis_angle_to_quat(a),
+        &axis_angle_to_quat(b),
+        t,
+    ))
 }
 
 #[cfg(test)]

@@ -34,7 +34,17 @@ fn stick_model(with_posedirs: bool) -> (ModelArrays, [[f64; 3]; NUM_JOINTS]) {
     }
     let faces = vec![[0, 1, 2], [24, 18, 20]];
     (
-        ModelArrays { v_template, faces, shapedirs, num_betas: 2, posedirs, j_regressor, weights, parents: SMPL_PARENTS, beta_names: vec![] },
+        ModelArrays {
+            v_template,
+            faces,
+            shapedirs,
+            num_betas: 2,
+            posedirs,
+            j_regressor,
+            weights,
+            parents: SMPL_PARENTS,
+            beta_names: vec![],
+        },
         joints,
     )
 }
@@ -53,10 +63,19 @@ fn elbow_rotation_moves_the_forearm_vertex_as_worked_out_by_hand() {
     let elbow = shaped.joints[18];
     // (R - I)[0][0] = cos 90 - 1 = -1, so the pose blend shape moves the vertex -1 mm in z
     // before skinning; the 10 cm lever along +x turns to +y.
-    let want = [elbow[0] + transl[0], elbow[1] + 0.1 + transl[1], elbow[2] - 0.001 + transl[2]];
+    let want = [
+        elbow[0] + transl[0],
+        elbow[1] + 0.1 + transl[1],
+        elbow[2] - 0.001 + transl[2],
+    ];
     let got = posed.vertices[24];
     for c in 0..3 {
-        assert!((got[c] - want[c]).abs() < 1e-12, "axis {c}: got {} want {}", got[c], want[c]);
+        assert!(
+            (got[c] - want[c]).abs() < 1e-12,
+            "axis {c}: got {} want {}",
+            got[c],
+            want[c]
+        );
     }
     // Joints below the elbow did not move; the wrist swung with it.
     assert!((posed.joints[16][0] - shaped.joints[16][0] - transl[0]).abs() < 1e-12);
@@ -70,7 +89,15 @@ fn zero_pose_gives_the_shaped_template_plus_translation() {
     let (arrays, _) = stick_model(true);
     let model = BodyModel::from_arrays(arrays).unwrap();
     let shaped = model.shape(&[0.5, -1.0, 7.0]).unwrap(); // a third beta is ignored
-    let posed = model.pose(&shaped, &FramePose { pose: [0.0; POSE_DIM], transl: [1.0, 2.0, 3.0] }).unwrap();
+    let posed = model
+        .pose(
+            &shaped,
+            &FramePose {
+                pose: [0.0; POSE_DIM],
+                transl: [1.0, 2.0, 3.0],
+            },
+        )
+        .unwrap();
     for (p, s) in posed.vertices.iter().zip(&shaped.vertices) {
         for c in 0..3 {
             assert!((p[c] - [1.0, 2.0, 3.0][c] - s[c]).abs() < 1e-12);
@@ -88,7 +115,10 @@ fn batch_equals_frame_by_frame() {
             for (i, p) in pose.iter_mut().enumerate() {
                 *p = 0.3 * ((i * 7 + k * 3) as f64).sin();
             }
-            FramePose { pose, transl: [0.1 * k as f64, 0.0, 0.0] }
+            FramePose {
+                pose,
+                transl: [0.1 * k as f64, 0.0, 0.0],
+            }
         })
         .collect();
     let batch = model.pose_batch(&shaped, &frames).unwrap();
@@ -104,7 +134,17 @@ fn non_finite_inputs_are_errors_not_panics() {
     let shaped = model.shape(&[]).unwrap();
     let mut pose = [0.0; POSE_DIM];
     pose[5] = f64::INFINITY;
-    assert!(model.pose(&shaped, &FramePose { pose, transl: [0.0; 3] }).is_err());
+    assert!(
+        model
+            .pose(
+                &shaped,
+                &FramePose {
+                    pose,
+                    transl: [0.0; 3]
+                }
+            )
+            .is_err()
+    );
 }
 
 #[test]

@@ -8,7 +8,8 @@ use motions::npz::Npz;
 use motions::{BodyModel, FramePose};
 
 fn reference_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/smplx_reference");
+    let dir =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/smplx_reference");
     dir.join("smplx_reference.npz").exists().then_some(dir)
 }
 
@@ -24,7 +25,13 @@ fn forward_pass_matches_smplx_reference_cases() {
     assert_eq!(cases, 12);
     let mut worst: f64 = 0.0;
     for k in 0..cases {
-        let mut get = |name: &str| reference.numeric(&format!("case{k}_{name}")).unwrap().unwrap().data;
+        let mut get = |name: &str| {
+            reference
+                .numeric(&format!("case{k}_{name}"))
+                .unwrap()
+                .unwrap()
+                .data
+        };
         let betas = get("betas");
         let full_pose = get("full_pose");
         let transl = get("transl");
@@ -32,10 +39,25 @@ fn forward_pass_matches_smplx_reference_cases() {
         let want_joints = get("joints");
         let want_g = get("G");
         let shaped = model.shape(&betas).unwrap();
-        let frame = FramePose { pose: full_pose.try_into().unwrap(), transl: transl.clone().try_into().unwrap() };
+        let frame = FramePose {
+            pose: full_pose.try_into().unwrap(),
+            transl: transl.clone().try_into().unwrap(),
+        };
         let posed = model.pose(&shaped, &frame).unwrap();
-        let dv = posed.vertices.iter().flatten().zip(&want_vertices).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        let dj = posed.joints.iter().flatten().zip(&want_joints).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let dv = posed
+            .vertices
+            .iter()
+            .flatten()
+            .zip(&want_vertices)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let dj = posed
+            .joints
+            .iter()
+            .flatten()
+            .zip(&want_joints)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         // G (no translation in smplx's intermediates): rotation and joint position.
         let mut dg: f64 = 0.0;
         for (j, t) in posed.transforms.iter().enumerate() {
@@ -47,7 +69,10 @@ fn forward_pass_matches_smplx_reference_cases() {
             }
         }
         println!("case {k}: max |dv| {dv:.2e} m, |dj| {dj:.2e} m, |dG| {dg:.2e}");
-        assert!(dv < 1e-7 && dj < 1e-7 && dg < 1e-7, "case {k}: vertices {dv:e}, joints {dj:e}, G {dg:e} (tolerance 1e-7 m)");
+        assert!(
+            dv < 1e-7 && dj < 1e-7 && dg < 1e-7,
+            "case {k}: vertices {dv:e}, joints {dj:e}, G {dg:e} (tolerance 1e-7 m)"
+        );
         worst = worst.max(dv).max(dj);
     }
     println!("worst deviation over 12 cases: {worst:.2e} m (tolerance 1e-7)");

@@ -18,7 +18,10 @@ pub fn run(args: &BodyArgs) -> Result<()> {
         None => BodyParams::default(),
     };
     let shaped = model.shape(&params.betas)?;
-    let mut frame = FramePose { pose: [0.0; POSE_DIM], transl: [0.0; 3] };
+    let mut frame = FramePose {
+        pose: [0.0; POSE_DIM],
+        transl: [0.0; 3],
+    };
     if let Some(pose) = &params.pose {
         frame.pose.copy_from_slice(pose);
     }
@@ -28,7 +31,10 @@ pub fn run(args: &BodyArgs) -> Result<()> {
     if let (Some(source), Some(k)) = (&args.motion, args.frame) {
         let motion = inputs::motion(source, &model, &shaped)?;
         let Some(f) = motion.frames.get(k) else {
-            bail!("--frame {k} is past the end of '{source}' ({} frames at 30 fps)", motion.len());
+            bail!(
+                "--frame {k} is past the end of '{source}' ({} frames at 30 fps)",
+                motion.len()
+            );
         };
         frame = *f;
     }
@@ -36,9 +42,20 @@ pub fn run(args: &BodyArgs) -> Result<()> {
     let height = super::height(&shaped.vertices);
     let boundary = model.boundary_edge_count();
     if let Some(out) = &args.out {
-        let comment = format!("dit-garment body: model {}, betas {:?}\nmetres, y up, facing +z; vertices in the model's order", model.name(), shaped.betas);
+        let comment = format!(
+            "dit-garment body: model {}, betas {:?}\nmetres, y up, facing +z; vertices in the model's order",
+            model.name(),
+            shaped.betas
+        );
         write_obj(out, &posed.vertices, model.faces(), &comment)?;
-        println!("wrote {} ({} vertices, {} triangles, rest height {:.3} m, {} boundary edges)", out.display(), model.num_vertices(), model.faces().len(), height, boundary);
+        println!(
+            "wrote {} ({} vertices, {} triangles, rest height {:.3} m, {} boundary edges)",
+            out.display(),
+            model.num_vertices(),
+            model.faces().len(),
+            height,
+            boundary
+        );
     }
     if let Some(path) = &args.json {
         write_json(

@@ -22,9 +22,15 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let model = BodyModel::default_body();
     let shaped = model.shape(&[])?;
     let blend = BlendIn::default();
-    let motion = inputs::motion(&args.motion, &model, &shaped)?.with_blend_in(&canonical_a_pose(), blend);
+    let motion =
+        inputs::motion(&args.motion, &model, &shaped)?.with_blend_in(&canonical_a_pose(), blend);
 
-    let bar = ProgressBar::new(motion.len() as u64).with_style(ProgressStyle::with_template("{msg:>8} [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})")?.progress_chars("=> "));
+    let bar = ProgressBar::new(motion.len() as u64).with_style(
+        ProgressStyle::with_template(
+            "{msg:>8} [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
+        )?
+        .progress_chars("=> "),
+    );
     bar.set_message("posing");
     let pose_start = Instant::now();
     let posed = motion
@@ -40,13 +46,23 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     bar.finish_and_clear();
 
     let sequence = args.out.join("body.mcap");
-    let extra = BTreeMap::from([("blend_frames".to_string(), blend.blend_frames.to_string()), ("settle_frames".to_string(), blend.settle_frames.to_string())]);
-    write_atomic(&sequence, |w| write_body_sequence(w, &model, &shaped, &motion, &posed, &extra))?;
+    let extra = BTreeMap::from([
+        ("blend_frames".to_string(), blend.blend_frames.to_string()),
+        ("settle_frames".to_string(), blend.settle_frames.to_string()),
+    ]);
+    write_atomic(&sequence, |w| {
+        write_body_sequence(w, &model, &shaped, &motion, &posed, &extra)
+    })?;
     let mut objs = Vec::new();
     if args.obj_every > 0 {
         for k in (0..posed.len()).step_by(args.obj_every) {
             let path = args.out.join("frames").join(format!("body_{k:04}.obj"));
-            write_obj(&path, &posed[k].vertices, model.faces(), &format!("dit-garment demo: {} frame {k}", motion.name))?;
+            write_obj(
+                &path,
+                &posed[k].vertices,
+                model.faces(),
+                &format!("dit-garment demo: {} frame {k}", motion.name),
+            )?;
             objs.push(path);
         }
     }
@@ -63,7 +79,20 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     if let Some(path) = &args.json {
         write_json(path, &summary)?;
     }
-    println!("demo: default body ({} vertices, closed) through '{}': {} frames at 30 fps ({} blend-in + {} settle)", model.num_vertices(), motion.name, motion.len(), blend.blend_frames, blend.settle_frames);
-    println!("  posed at {:.0} frames/s; wrote {}, {} OBJ frames in {}, summary.json", motion.len() as f64 / pose_seconds, sequence.display(), objs.len(), args.out.join("frames").display());
+    println!(
+        "demo: default body ({} vertices, closed) through '{}': {} frames at 30 fps ({} blend-in + {} settle)",
+        model.num_vertices(),
+        motion.name,
+        motion.len(),
+        blend.blend_frames,
+        blend.settle_frames
+    );
+    println!(
+        "  posed at {:.0} frames/s; wrote {}, {} OBJ frames in {}, summary.json",
+        motion.len() as f64 / pose_seconds,
+        sequence.display(),
+        objs.len(),
+        args.out.join("frames").display()
+    );
     Ok(())
 }

@@ -19,6 +19,8 @@ pub fn run(cli: Cli) -> Result<()> {
 
 /// Vertical extent of a vertex set, metres.
 pub fn height(vertices: &[[f64; 3]]) -> f64 {
-    let (lo, hi) = vertices.iter().fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v[1]), hi.max(v[1])));
+    let (lo, hi) = vertices.iter().fold((f64::MAX, f64::MIN), |(lo, hi), v| {
+        (lo.min(v[1]), hi.max(v[1]))
+    });
     hi - lo
 }

@@ -15,21 +15,54 @@ use crate::recording::write_body_sequence;
 pub fn run(command: MotionsCommand) -> Result<()> {
     match command {
         MotionsCommand::List { json } => list(json.as_deref()),
-        MotionsCommand::Show { motion, model, json } => show(&motion, model.model.as_deref(), json.as_deref()),
-        MotionsCommand::Export { motion, out, model, betas, blend_frames, settle_frames, json } => {
+        MotionsCommand::Show {
+            motion,
+            model,
+            json,
+        } => show(&motion, model.model.as_deref(), json.as_deref()),
+        MotionsCommand::Export {
+            motion,
+            out,
+            model,
+            betas,
+            blend_frames,
+            settle_frames,
+            json,
+        } => {
             let model = inputs::body_model(model.model.as_deref())?;
             let shaped = model.shape(&betas)?;
             let mut m = inputs::motion(&motion, &model, &shaped)?;
             if blend_frames + settle_frames > 0 {
-                m = m.with_blend_in(&canonical_a_pose(), BlendIn { blend_frames, settle_frames });
+                m = m.with_blend_in(
+                    &canonical_a_pose(),
+                    BlendIn {
+                        blend_frames,
+                        settle_frames,
+                    },
+                );
             }
             let posed = model.pose_batch(&shaped, &m.frames)?;
-            let extra = BTreeMap::from([("blend_frames".to_string(), blend_frames.to_string()), ("settle_frames".to_string(), settle_frames.to_string())]);
-            write_atomic(&out, |w| write_body_sequence(w, &model, &shaped, &m, &posed, &extra))?;
+            let extra = BTreeMap::from([
+                ("blend_frames".to_string(), blend_frames.to_string()),
+                ("settle_frames".to_string(), settle_frames.to_string()),
+            ]);
+            write_atomic(&out, |w| {
+                write_body_sequence(w, &model, &shaped, &m, &posed, &extra)
+            })?;
             let bytes = std::fs::metadata(&out)?.len();
-            println!("wrote {} ({} frames at {} fps, {} vertices, {:.1} MB)", out.display(), m.len(), m.fps, model.num_vertices(), bytes as f64 / 1e6);
+            println!(
+                "wrote {} ({} frames at {} fps, {} vertices, {:.1} MB)",
+                out.display(),
+                m.len(),
+                m.fps,
+                model.num_vertices(),
+                bytes as f64 / 1e6
+            );
             if let Some(path) = json {
-                write_json(&path, &json!({"frames": m.len(), "fps": m.fps, "vertices": model.num_vertices(), "bytes": bytes, "file": out}))?;
+                write_json(
+                    &path,
+                    &json!({"frames": m.len(), "fps": m.fps, "vertices": model.num_vertices(), "bytes": bytes, "file": out}),
+                )?;
             }
             Ok(())
         }
@@ -37,31 +70,56 @@ pub fn run(command: MotionsCommand) -> Result<()> {
 }
 
 fn list(json_path: Option<&std::path::Path>) -> Result<()> {
-    println!("{:<15} {:>6} {:>9}  description", "name", "frames", "seconds");
+    println!(
+        "{:<15} {:>6} {:>9}  description",
+        "name", "frames", "seconds"
+    );
     let mut rows = Vec::new();
     for info in MOTIONS {
         let spec = MotionSpec::parse(info.name)?;
         let frames = (spec.duration * 30.0).round() as usize;
-        println!("{:<15} {:>6} {:>9.2}  {}", info.name, frames, spec.duration, info.description);
+        println!(
+            "{:<15} {:>6} {:>9.2}  {}",
+            info.name, frames, spec.duration, info.description
+        );
         rows.push(json!({"name": info.name, "frames": frames, "fps": 30.0, "duration_s": spec.duration, "description": info.description,
             "parameters": {"speed": "tempo multiplier, 0.25-3, default 1", "amplitude": "joint-angle multiplier, 0-1.5, default 1", "duration": "seconds, default as listed"}}));
     }
-    println!("\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6; AMASS .npz files are accepted wherever a motion is");
+    println!(
+        "\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6; AMASS .npz files are accepted wherever a motion is"
+    );
     if let Some(path) = json_path {
         write_json(path, &rows)?;
     }
     Ok(())
 }
 
-fn show(source: &str, model_path: Option<&std::path::Path>, json_path: Option<&std::path::Path>) -> Result<()> {
+fn show(
+    source: &str,
+    model_path: Option<&std::path::Path>,
+    json_path: Option<&std::path::Path>,
+) -> Result<()> {
     let model = inputs::body_model(model_path)?;
     let shaped = model.shape(&[])?;
     let motion = inputs::motion(source, &model, &shaped)?;
     let summary = summarize(&motion);
     println!("motion    {}", motion.name);
-    println!("frames    {} at {} fps ({:.2} s)", motion.len(), motion.fps, motion.duration());
-    let travel = summary["root_travel_m"].as_array().cloned().unwrap_or_default();
-    println!("root      travel x {:+.3} y {:+.3} z {:+.3} m", travel[0].as_f64().unwrap_or(0.0), travel[1].as_f64().unwrap_or(0.0), travel[2].as_f64().unwrap_or(0.0));
+    println!(
+        "frames    {} at {} fps ({:.2} s)",
+        motion.len(),
+        motion.fps,
+        motion.duration()
+    );
+    let travel = summary["root_travel_m"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    println!(
+        "root      travel x {:+.3} y {:+.3} z {:+.3} m",
+        travel[0].as_f64().unwrap_or(0.0),
+        travel[1].as_f64().unwrap_or(0.0),
+        travel[2].as_f64().unwrap_or(0.0)
+    );
     println!("joint rotation ranges (degrees from the T-pose, max over frames):");
     for j in 0..NUM_JOINTS {
         let deg = summary["max_joint_angle_deg"][j].as_f64().unwrap_or(0.0);
@@ -79,7 +137,17 @@ fn summarize(motion: &Motion) -> serde_json::Value {
     let first = motion.frames[0].transl;
     let last = motion.frames[motion.len() - 1].transl;
     let max_angle: Vec<f64> = (0..NUM_JOINTS)
-        .map(|j| motion.frames.iter().map(|f| (f.pose[3 * j].powi(2) + f.pose[3 * j + 1].powi(2) + f.pose[3 * j + 2].powi(2)).sqrt().to_degrees()).fold(0.0, f64::max))
+        .map(|j| {
+            motion
+                .frames
+                .iter()
+                .map(|f| {
+                    (f.pose[3 * j].powi(2) + f.pose[3 * j + 1].powi(2) + f.pose[3 * j + 2].powi(2))
+                        .sqrt()
+                        .to_degrees()
+                })
+                .fold(0.0, f64::max)
+        })
         .collect();
     json!({
         "name": motion.name, "frames": motion.len(), "fps": motion.fps, "duration_s": motion.duration(),

@@ -1,0 +1,268 @@
+//! End-to-end: the `dit-garment` binary as a user runs it, outputs read back with public
+//! libraries (mcap, serde_json), and bad input failing cleanly with nothing half-written.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dit-garment"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).to_string()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = run(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+fn json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Counts MCAP messages per topic.
+fn topics(path: &Path) -> std::collections::BTreeMap<String, usize> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut counts = std::collections::BTreeMap::new();
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        *counts
+            .entry(message.unwrap().channel.topic.clone())
+            .or_insert(0) += 1;
+    }
+    counts
+}
+
+#[test]
+fn demo_writes_a_readable_sequence_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let stdout = ok(&[
+        "demo",
+        "--out",
+        out.to_str().unwrap(),
+        "--motion",
+        "walk:duration=1",
+    ]);
+    assert!(stdout.contains("default body"), "{stdout}");
+    let summary = json(&out.join("summary.json"));
+    assert_eq!(
+        summary["frames"], 90,
+        "30 blend + 30 settle + 30 motion frames"
+    );
+    assert_eq!(summary["boundary_edges"], 0);
+    let counts = topics(&out.join("body.mcap"));
+    assert_eq!(counts["/body/vertices"], 90);
+    assert_eq!(counts["/body/pose"], 90);
+    assert_eq!(counts["/body/faces"], 1);
+    assert!(out.join("frames/body_0000.obj").exists());
+    assert!(
+        std::fs::read_dir(&out).unwrap().all(|e| !e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .ends_with(".tmp"))
+    );
+}
+
+#[test]
+fn body_writes_obj_and_json_with_the_checked_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("body.obj");
+    let report = dir.path().join("body.json");
+    ok(&[
+        "body",
+        "--out",
+        obj.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    let j = json(&report);
+    assert_eq!(j["boundary_edges"], 0);
+    let vertices = j["vertices"].as_u64().unwrap();
+    assert!(vertices > 10_000 && vertices <= 14_000);
+    assert!(j["faces"].as_u64().unwrap() > 20_000);
+    let h = j["height_m"].as_f64().unwrap();
+    assert!((1.5..2.0).contains(&h), "height {h}");
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("v ")).count() as u64,
+        vertices
+    );
+
+    // A pose from a params file and from a motion frame.
+    let params = dir.path().join("params.json");
+    let mut pose = vec![0.0; 72];
+    pose[18 * 3 + 1] = -1.2;
+    std::fs::write(
+        &params,
+        serde_json::json!({"betas": [1.0], "pose": pose, "transl": [0.0, 1.0, 0.0]}).to_string(),
+    )
+    .unwrap();
+    let r2 = dir.path().join("b2.json");
+    ok(&[
+        "body",
+        "--params",
+        params.to_str().unwrap(),
+        "--json",
+        r2.to_str().unwrap(),
+    ]);
+    let taller = json(&r2)["height_m"].as_f64().unwrap();
+    assert!(
+        (taller - h - 0.07).abs() < 0.01,
+        "beta 0 is stature: {h} -> {taller}"
+    );
+    let r3 = dir.path().join("b3.json");
+    ok(&[
+        "body",
+        "--motion",
+        "squat",
+        "--frame",
+        "90",
+        "--json",
+        r3.to_str().unwrap(),
+    ]);
+    assert!(
+        json(&r3)["posed_height_m"].as_f64().unwrap() < h - 0.3,
+        "mid-squat is lower"
+    );
+}
+
+#[test]
+fn motions_list_json_has_the_required_motions() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("list.json");
+    ok(&["motions", "list", "--json", path.to_str().unwrap()]);
+    let list = json(&path);
+    let names: Vec<&str> = list
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    for required in [
+        "walk",
+        "run",
+        "jumping_jacks",
+        "arm_raise",
+        "arm_swing",
+        "squat",
+        "torso_twist",
+        "turn",
+        "kick",
+        "sway",
+    ] {
+        assert!(
+            names.contains(&required),
+            "{required} missing from {names:?}"
+        );
+    }
+    for m in list.as_array().unwrap() {
+        assert_eq!(m["fps"], 30.0);
+        assert!(m["frames"].as_u64().unwrap() > 0);
+    }
+}
+
+#[test]
+fn motions_show_and_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("show.json");
+    ok(&[
+        "motions",
+        "show",
+        "walk:speed=1.2,duration=3",
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    let j = json(&report);
+    assert_eq!(j["frames"], 90);
+    assert!(
+        j["root_travel_m"][2].as_f64().unwrap() > 1.0,
+        "walking moves forward along +z"
+    );
+    let seq = dir.path().join("kick.mcap");
+    ok(&[
+        "motions",
+        "export",
+        "kick:duration=1",
+        "--out",
+        seq.to_str().unwrap(),
+        "--blend-frames",
+        "10",
+        "--settle-frames",
+        "5",
+        "--betas",
+        "0.5,-1",
+    ]);
+    assert_eq!(topics(&seq)["/body/joints"], 45);
+}
+
+#[test]
+fn bad_input_fails_with_a_clear_message_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("x.obj");
+    let err = fails(&[
+        "body",
+        "--model",
+        "/no/such/SMPL.npz",
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(err.contains("/no/such/SMPL.npz"), "{err}");
+    let pkl = dir.path().join("SMPL_MALE.pkl");
+    std::fs::write(&pkl, [0x80u8, 0x02, 0x7d]).unwrap();
+    let err = fails(&[
+        "body",
+        "--model",
+        pkl.to_str().unwrap(),
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(err.contains("pickle") && err.contains("npz"), "{err}");
+    let params = dir.path().join("p.json");
+    std::fs::write(&params, r#"{"pose": [0.0, 1.0]}"#).unwrap();
+    let err = fails(&[
+        "body",
+        "--params",
+        params.to_str().unwrap(),
+        "--out",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(err.contains("72"), "{err}");
+    let err = fails(&["motions", "show", "moonwalk"]);
+    assert!(
+        err.contains("walk") && err.contains("sway"),
+        "lists the motions: {err}"
+    );
+    let err = fails(&["motions", "show", "walk:speed=9"]);
+    assert!(err.contains("speed"), "{err}");
+    let broken = dir.path().join("broken.npz");
+    std::fs::write(&broken, b"PK\x03\x04 truncated").unwrap();
+    let seq = dir.path().join("out.mcap");
+    let err = fails(&[
+        "motions",
+        "export",
+        broken.to_str().unwrap(),
+        "--out",
+        seq.to_str().unwrap(),
+    ]);
+    assert!(err.contains("broken.npz"), "{err}");
+    assert!(!obj.exists() && !seq.exists(), "nothing written on failure");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        4,
+        "no temporary files left"
+    );
+}
