@@ -130,7 +130,7 @@ fn body_writes_obj_and_json_with_the_checked_keys() {
         "--motion",
         "squat",
         "--frame",
-        "90",
+        "50",
         "--json",
         r3.to_str().unwrap(),
     ]);
@@ -262,7 +262,7 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
     assert!(!obj.exists() && !seq.exists(), "nothing written on failure");
     assert_eq!(
         std::fs::read_dir(dir.path()).unwrap().count(),
-        4,
-        "no temporary files left"
+        3,
+        "only the three inputs remain: no outputs, no temporary files"
     );
 }

@@ -116,12 +116,10 @@ fn amass_motion_is_converted_and_resampled_by_time() {
             // trans' = R (trans + J0) - J0 with R = Rx(-90): (x, y, z) -> (x, z, -y).
             let src = [0.1 * t, 0.2, 1.0];
             let want = [src[0], src[2] + j0[2] - j0[1], -(src[1] + j0[1]) - j0[2]];
-            for c in 0..3 {
+            for (c, (got, want)) in f.transl.iter().zip(want).enumerate() {
                 assert!(
-                    (f.transl[c] - want[c]).abs() < 1e-5,
-                    "{fps} fps frame {k} axis {c}: {} vs {}",
-                    f.transl[c],
-                    want[c]
+                    (got - want).abs() < 1e-5,
+                    "{fps} fps frame {k} axis {c}: {got} vs {want}"
                 );
             }
         }
