@@ -369,7 +369,9 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
             0.0
         }
         "squat" => {
-            let d = a * rise(phase(0.3));
+            // Depth is capped: beyond 1.1 the hips would flex past human range (found by the
+            // joint-limit test at amplitude 1.5).
+            let d = a.min(1.1) * rise(phase(0.3));
             // Foot flat: ankle dorsiflexion = knee flexion - hip flexion.
             b.leg(Side::Left, 95.0 * d, 115.0 * d, 20.0 * d);
             b.leg(Side::Right, 95.0 * d, 115.0 * d, 20.0 * d);

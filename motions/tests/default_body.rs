@@ -177,3 +177,46 @@ fn every_builtin_motion_poses_the_default_body_plausibly() {
         assert!(motion.frames.iter().all(|f| f.pose.len() == POSE_DIM));
     }
 }
+
+#[test]
+fn builtin_motions_keep_joint_angles_within_human_limits() {
+    // Largest rotation from the T-pose allowed per joint, degrees (the root is free).
+    // Shoulders are measured from the T-pose, so arms hanging down already use ~70 degrees.
+    let limits = [
+        360.0, 125.0, 125.0, 45.0, 145.0, 145.0, 45.0, 45.0, 45.0, 45.0, 35.0, 35.0, 45.0, 35.0,
+        35.0, 45.0, 175.0, 175.0, 150.0, 150.0, 80.0, 80.0, 80.0, 80.0,
+    ];
+    let model = BodyModel::default_body();
+    let shaped = model.shape(&[]).unwrap();
+    for info in MOTIONS {
+        let motion = MotionSpec::parse(&format!("{}:amplitude=1.5", info.name))
+            .unwrap()
+            .generate(&model, &shaped)
+            .unwrap();
+        for (j, limit) in limits.iter().enumerate().skip(1) {
+            let max = motion
+                .frames
+                .iter()
+                .map(|f| {
+                    (f.pose[3 * j].powi(2) + f.pose[3 * j + 1].powi(2) + f.pose[3 * j + 2].powi(2))
+                        .sqrt()
+                        .to_degrees()
+                })
+                .fold(0.0, f64::max);
+            assert!(
+                max <= *limit,
+                "{} at amplitude 1.5: joint {} turns {max:.1} deg (limit {limit})",
+                info.name,
+                motions::JOINT_NAMES[j]
+            );
+        }
+        // Knees bend only backwards, elbows only forwards.
+        for f in &motion.frames {
+            assert!(
+                f.pose[4 * 3] > -0.05 && f.pose[5 * 3] > -0.05,
+                "{}: a knee hyperextends",
+                info.name
+            );
+        }
+    }
+}
