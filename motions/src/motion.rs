@@ -119,6 +119,21 @@ impl Motion {
         (self.frames.len() - 1) as f64 / self.fps
     }
 
+    /// Largest rotation of each joint away from the T-pose over all frames, degrees (the
+    /// axis-angle magnitude; joint 0 is the root orientation).
+    pub fn max_joint_angles_deg(&self) -> [f64; NUM_JOINTS] {
+        std::array::from_fn(|j| {
+            self.frames
+                .iter()
+                .map(|f| {
+                    Vector3::new(f.pose[3 * j], f.pose[3 * j + 1], f.pose[3 * j + 2])
+                        .norm()
+                        .to_degrees()
+                })
+                .fold(0.0, f64::max)
+        })
+    }
+
     /// Resamples by time to `fps`: output frame k is at t = k / fps, for every t within the
     /// motion; joint rotations are slerped (shorter arc, so q/-q flips in mocap do no harm) and
     /// translations lerped between the two source frames around t. Works for any source rate

@@ -136,19 +136,7 @@ fn show(
 fn summarize(motion: &Motion) -> serde_json::Value {
     let first = motion.frames[0].transl;
     let last = motion.frames[motion.len() - 1].transl;
-    let max_angle: Vec<f64> = (0..NUM_JOINTS)
-        .map(|j| {
-            motion
-                .frames
-                .iter()
-                .map(|f| {
-                    (f.pose[3 * j].powi(2) + f.pose[3 * j + 1].powi(2) + f.pose[3 * j + 2].powi(2))
-                        .sqrt()
-                        .to_degrees()
-                })
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    let max_angle = motion.max_joint_angles_deg();
     json!({
         "name": motion.name, "frames": motion.len(), "fps": motion.fps, "duration_s": motion.duration(),
         "root_travel_m": [last[0] - first[0], last[1] - first[1], last[2] - first[2]],
