@@ -1,5 +1,26 @@
-//! The ground-truth engine (not yet implemented; see the engine issue).
+//! The ground-truth engine: velocity-level projective dynamics (edge springs, Laplacian
+//! bending, lumped mass, seams, attachments, pins) with exact Signorini-Coulomb frictional
+//! contact against animated bodies and props, after Ly, Jouve, Boissieux and
+//! Bertails-Descoubes, "Projective Dynamics with Dry Frictional Contact" (2020).
 //!
-//! This crate will hold the velocity-level projective-dynamics cloth solver with exact
-//! Signorini-Coulomb frictional contact against animated bodies, ground and props; seams and
-//! attachments; the scene runner; MCAP recordings; quality gates and physical energies.
+//! Data: a [`ClothMesh`] and [`Material`] make a [`ClothSetup`]; a [`Solver`] holds its
+//! factorized global matrix and advances a [`ClothState`] against [`obstacles`]. Units are SI,
+//! y is up.
+#![warn(missing_docs)]
+
+mod cloth;
+pub mod constraints;
+mod contact;
+mod error;
+pub mod obstacles;
+mod params;
+mod solver;
+mod system;
+
+pub use cloth::{ClothMesh, ClothState, Vec3};
+pub use constraints::{Attachment, BendingRest, Seam};
+pub use contact::Contact;
+pub use error::{Error, Result};
+pub use params::{Material, SolverParams};
+pub use solver::{ClothSetup, FrameReport, Solver, StageTimes, StepReport};
+pub use system::Symbolic;

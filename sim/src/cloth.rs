@@ -1,0 +1,237 @@
+//! The cloth: its mesh (rest shape and triangles, validated once) and its state (positions
+//! and velocities), kept apart from the solver's workspace.
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector3;
+
+use crate::error::{Error, Result};
+
+/// 3-vector of f64, the engine's one vector type.
+pub type Vec3 = Vector3<f64>;
+
+/// A triangle mesh in its rest shape. The rest shape gives the edges' rest lengths and the
+/// bending rest state; it is usually the draped template.
+#[derive(Debug, Clone)]
+pub struct ClothMesh {
+    rest: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    edges: Vec<[u32; 2]>,
+    areas: Vec<f64>,
+}
+
+impl ClothMesh {
+    /// Builds and validates a mesh: at least one triangle, indices in range, finite positions,
+    /// no degenerate triangle (area below 1e-12 m^2) and every vertex used.
+    pub fn new(rest: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Result<Self> {
+        if triangles.is_empty() {
+            return Err(Error::Mesh("no triangles".into()));
+        }
+        let n = rest.len();
+        if let Some(i) = rest.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(Error::Mesh(format!("vertex {i} is not finite")));
+        }
+        let mut used = vec![false; n];
+        let mut edge_set = BTreeMap::new();
+        let mut areas = Vec::with_capacity(triangles.len());
+        for (t, tri) in triangles.iter().enumerate() {
+            if tri.iter().any(|&v| v as usize >= n) {
+                return Err(Error::Mesh(format!(
+                    "triangle {t} refers to vertex {:?} but there are {n} vertices",
+                    tri
+                )));
+            }
+            let [a, b, c] = tri.map(|v| rest[v as usize]);
+            let area = 0.5 * (b - a).cross(&(c - a)).norm();
+            if area < 1e-12 {
+                return Err(Error::Mesh(format!("triangle {t} {tri:?} is degenerate")));
+            }
+            areas.push(area);
+            for k in 0..3 {
+                used[tri[k] as usize] = true;
+                let (i, j) = (tri[k], tri[(k + 1) % 3]);
+                edge_set.insert([i.min(j), i.max(j)], ());
+            }
+        }
+        if let Some(i) = used.iter().position(|u| !u) {
+            return Err(Error::Mesh(format!("vertex {i} is used by no triangle")));
+        }
+        Ok(Self {
+            rest,
+            triangles,
+            edges: edge_set.into_keys().collect(),
+            areas,
+        })
+    }
+
+    /// Vertex count.
+    pub fn num_vertices(&self) -> usize {
+        self.rest.len()
+    }
+
+    /// Rest positions, metres.
+    pub fn rest(&self) -> &[Vec3] {
+        &self.rest
+    }
+
+    /// Triangles (vertex indices).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Unique edges, each as (smaller index, larger index), sorted.
+    pub fn edges(&self) -> &[[u32; 2]] {
+        &self.edges
+    }
+
+    /// Rest area of each triangle, m^2.
+    pub fn triangle_areas(&self) -> &[f64] {
+        &self.areas
+    }
+
+    /// Lumped vertex masses, kg: density times a third of the adjacent triangles' rest area.
+    pub fn lumped_masses(&self, density: f64) -> Vec<f64> {
+        let mut mass = vec![0.0; self.rest.len()];
+        for (tri, area) in self.triangles.iter().zip(&self.areas) {
+            for &v in tri {
+                mass[v as usize] += density * area / 3.0;
+            }
+        }
+        mass
+    }
+
+    /// Total rest area, m^2.
+    pub fn area(&self) -> f64 {
+        self.areas.iter().sum()
+    }
+
+    /// Vertices on the boundary (on an edge used by one triangle only).
+    pub fn boundary_vertices(&self) -> Vec<bool> {
+        let mut count: BTreeMap<[u32; 2], u32> = BTreeMap::new();
+        for tri in &self.triangles {
+            for k in 0..3 {
+                let (i, j) = (tri[k], tri[(k + 1) % 3]);
+                *count.entry([i.min(j), i.max(j)]).or_default() += 1;
+            }
+        }
+        let mut boundary = vec![false; self.rest.len()];
+        for (edge, c) in count {
+            if c == 1 {
+                boundary[edge[0] as usize] = true;
+                boundary[edge[1] as usize] = true;
+            }
+        }
+        boundary
+    }
+
+    /// A regular n x n grid of `size` x `size` metres in the x-z plane at height `y`, vertex
+    /// index i * n + j for x index i and z index j, each quad split along the same diagonal
+    /// (the peer simulators' drape-scene layout).
+    pub fn grid(n: usize, size: f64, y: f64) -> Result<Self> {
+        if n < 2 {
+            return Err(Error::Mesh(format!("grid needs n >= 2, got {n}")));
+        }
+        let step = size / (n - 1) as f64;
+        let mut rest = Vec::with_capacity(n * n);
+        for i in 0..n {
+            for j in 0..n {
+                rest.push(Vec3::new(
+                    -0.5 * size + i as f64 * step,
+                    y,
+                    -0.5 * size + j as f64 * step,
+                ));
+            }
+        }
+        let mut triangles = Vec::with_capacity(2 * (n - 1) * (n - 1));
+        let id = |i: usize, j: usize| (i * n + j) as u32;
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                triangles.push([a, b, c]);
+                triangles.push([a, c, d]);
+            }
+        }
+        Self::new(rest, triangles)
+    }
+}
+
+/// Positions and velocities of every cloth vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClothState {
+    /// Positions, metres.
+    pub positions: Vec<Vec3>,
+    /// Velocities, m/s.
+    pub velocities: Vec<Vec3>,
+}
+
+impl ClothState {
+    /// At rest at the given positions.
+    pub fn at_rest(positions: Vec<Vec3>) -> Self {
+        let velocities = vec![Vec3::zeros(); positions.len()];
+        Self {
+            positions,
+            velocities,
+        }
+    }
+
+    /// Whether every value is finite.
+    pub fn is_finite(&self) -> bool {
+        self.positions
+            .iter()
+            .chain(&self.velocities)
+            .all(|p| p.iter().all(|c| c.is_finite()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_topology_and_mass() {
+        let mesh = ClothMesh::grid(3, 1.0, 0.0).unwrap();
+        assert_eq!(mesh.num_vertices(), 9);
+        assert_eq!(mesh.triangles().len(), 8);
+        // 2 * 3 * 2 axis edges + 4 diagonals
+        assert_eq!(mesh.edges().len(), 16);
+        let total: f64 = mesh.lumped_masses(0.5).iter().sum();
+        assert!((total - 0.5).abs() < 1e-12, "total mass {total}");
+        let boundary = mesh.boundary_vertices();
+        assert_eq!(boundary.iter().filter(|b| **b).count(), 8);
+        assert!(!boundary[4]);
+    }
+
+    #[test]
+    fn bad_meshes_are_rejected_with_a_reason() {
+        let p = vec![Vec3::zeros(), Vec3::x(), Vec3::y()];
+        assert!(
+            ClothMesh::new(p.clone(), vec![[0, 1, 3]])
+                .unwrap_err()
+                .to_string()
+                .contains("vertex")
+        );
+        assert!(
+            ClothMesh::new(p.clone(), vec![[0, 1, 1]])
+                .unwrap_err()
+                .to_string()
+                .contains("degenerate")
+        );
+        assert!(ClothMesh::new(p.clone(), vec![]).is_err());
+        let mut q = p.clone();
+        q[1].x = f64::NAN;
+        assert!(
+            ClothMesh::new(q, vec![[0, 1, 2]])
+                .unwrap_err()
+                .to_string()
+                .contains("finite")
+        );
+        let mut r = p;
+        r.push(Vec3::z());
+        assert!(
+            ClothMesh::new(r, vec![[0, 1, 2]])
+                .unwrap_err()
+                .to_string()
+                .contains("used by no")
+        );
+    }
+}

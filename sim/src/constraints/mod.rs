@@ -1,0 +1,157 @@
+//! Projective-dynamics constraint terms W_t = (w_t / 2) |A_t x - p_t|^2 in one flat store.
+//!
+//! Every term is a stencil (vertex, coefficient) pairs, so A_t x = sum_k c_k x_{v_k} is a
+//! 3-vector and the global matrix is sum_t w_t a_t a_t^T, one scalar matrix shared by x, y
+//! and z. The kinds differ only in their projection p_t, each in its own file.
+
+mod attachments;
+mod bending;
+mod seams;
+mod stretch;
+
+pub use attachments::Attachment;
+pub use bending::BendingRest;
+pub use seams::Seam;
+
+use crate::cloth::{ClothMesh, Vec3};
+use crate::params::Material;
+
+/// What a term's projection does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Kind {
+    /// Edge spring: the edge vector rescaled to its rest length.
+    Stretch { rest_length: f64 },
+    /// Laplacian bending: the current Laplacian rescaled to the rest Laplacian's norm.
+    Bend { rest: Vec3 },
+    /// Seam: zero rest length, scaled by the seam's opening factor (1 = no pull, 0 = closed).
+    Seam,
+    /// Attachment to a moving target point (index into the attachment targets).
+    Attach { target: usize },
+}
+
+/// All terms of one cloth, with the weights of one material.
+#[derive(Debug, Clone, Default)]
+pub struct Constraints {
+    ptr: Vec<usize>,
+    vertex: Vec<u32>,
+    coeff: Vec<f64>,
+    weight: Vec<f64>,
+    kind: Vec<Kind>,
+}
+
+/// What the projections need besides the positions.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ProjectionInputs<'a> {
+    /// How open seams still are: 1 = rest (no pull), 0 = fully closed.
+    pub seam_opening: f64,
+    /// Current target of each attachment.
+    pub attachment_targets: &'a [Vec3],
+}
+
+impl Constraints {
+    /// Stretch springs on every edge and bending on every interior vertex, then seams and
+    /// attachments, weighted by `material` (k_s per edge, k_b per bending term) and their own
+    /// stiffness.
+    pub fn build(
+        mesh: &ClothMesh,
+        material: &Material,
+        bending_rest: BendingRest,
+        seams: &[Seam],
+        attachments: &[Attachment],
+    ) -> Self {
+        let mut c = Self::default();
+        c.ptr.push(0);
+        stretch::add(&mut c, mesh, material.stretch);
+        bending::add(&mut c, mesh, material.bending, bending_rest);
+        seams::add(&mut c, seams);
+        attachments::add(&mut c, attachments);
+        c
+    }
+
+    pub(crate) fn push(&mut self, stencil: &[(u32, f64)], weight: f64, kind: Kind) {
+        for &(v, c) in stencil {
+            self.vertex.push(v);
+            self.coeff.push(c);
+        }
+        self.ptr.push(self.vertex.len());
+        self.weight.push(weight);
+        self.kind.push(kind);
+    }
+
+    /// Number of terms.
+    pub fn len(&self) -> usize {
+        self.weight.len()
+    }
+
+    /// Whether there are no terms.
+    pub fn is_empty(&self) -> bool {
+        self.weight.is_empty()
+    }
+
+    /// The stencil of term `t`.
+    pub(crate) fn stencil(&self, t: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let range = self.ptr[t]..self.ptr[t + 1];
+        self.vertex[range.clone()]
+            .iter()
+            .zip(&self.coeff[range])
+            .map(|(&v, &c)| (v as usize, c))
+    }
+
+    /// Weight of term `t`.
+    pub(crate) fn weight(&self, t: usize) -> f64 {
+        self.weight[t]
+    }
+
+    /// A_t x.
+    #[inline]
+    pub(crate) fn apply(&self, t: usize, x: &[Vec3]) -> Vec3 {
+        let mut sum = Vec3::zeros();
+        for k in self.ptr[t]..self.ptr[t + 1] {
+            sum += self.coeff[k] * x[self.vertex[k] as usize];
+        }
+        sum
+    }
+
+    /// p_t: the projection of the current A_t x onto the term's constraint set.
+    #[inline]
+    pub(crate) fn project(&self, t: usize, ax: Vec3, inputs: &ProjectionInputs) -> Vec3 {
+        match self.kind[t] {
+            Kind::Stretch { rest_length } => stretch::project(ax, rest_length),
+            Kind::Bend { rest } => bending::project(ax, rest),
+            Kind::Seam => seams::project(ax, inputs.seam_opening),
+            Kind::Attach { target } => attachments::project(inputs.attachment_targets[target]),
+        }
+    }
+
+    /// Per vertex, the terms it appears in with coefficient times weight (for the gather that
+    /// builds the right-hand side without write conflicts).
+    pub(crate) fn incidence(&self, num_vertices: usize) -> (Vec<usize>, Vec<(u32, f64)>) {
+        let mut count = vec![0usize; num_vertices + 1];
+        for &v in &self.vertex {
+            count[v as usize + 1] += 1;
+        }
+        for i in 0..num_vertices {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut entries = vec![(0u32, 0.0); self.vertex.len()];
+        for t in 0..self.len() {
+            for k in self.ptr[t]..self.ptr[t + 1] {
+                let v = self.vertex[k] as usize;
+                entries[fill[v]] = (t as u32, self.coeff[k] * self.weight[t]);
+                fill[v] += 1;
+            }
+        }
+        (count, entries)
+    }
+
+    /// Potential energy sum_t (w_t / 2) |A_t x - p_t(x)|^2, joules.
+    pub(crate) fn energy(&self, x: &[Vec3], inputs: &ProjectionInputs) -> f64 {
+        (0..self.len())
+            .map(|t| {
+                let ax = self.apply(t, x);
+                0.5 * self.weight[t] * (ax - self.project(t, ax, inputs)).norm_squared()
+            })
+            .sum()
+    }
+}

@@ -1,0 +1,225 @@
+//! The animated body: a closed mesh given as keyframes (30 fps poses), linearly interpolated
+//! to every substep with the keyframe difference as its velocity, so friction carries the
+//! cloth along with the body.
+//!
+//! Detection uses the signed distance (parry3d's inside test), so a vertex that got deeper
+//! than the contact band is still found and brought out. To keep queries cheap, each cloth
+//! vertex remembers which side of the body it was last seen on and a lower bound on its
+//! distance: a vertex known to be far is not queried until it (or the body) could have moved
+//! that far, and a bounded query that finds nothing keeps the last known side.
+
+use rayon::prelude::*;
+
+use super::trimesh::MeshSurface;
+use super::{DetectionInput, Obstacle, SurfacePoint};
+use crate::cloth::Vec3;
+use crate::contact::Contact;
+use crate::error::{Error, Result};
+
+/// Distance a bounded query looks, as a multiple of the contact band (at least 3 cm).
+const QUERY_REACH: f64 = 3.0;
+
+/// What the body knows about one cloth vertex between steps.
+#[derive(Debug, Clone, Copy)]
+struct Track {
+    /// Last known side: +1 outside, -1 inside, 0 never seen.
+    side: i8,
+    /// Lower bound on the vertex's distance to the surface, m (0 = must query).
+    clearance: f64,
+    /// The predicted position the bound was computed at.
+    at: Vec3,
+}
+
+/// The animated body obstacle.
+pub struct AnimatedMesh {
+    surface: MeshSurface,
+    friction: f64,
+    start: Vec<Vec3>,
+    end: Vec<Vec3>,
+    times: (f64, f64),
+    current: Vec<Vec3>,
+    velocity: Vec<Vec3>,
+    moved: f64,
+    tracks: Vec<Track>,
+}
+
+impl AnimatedMesh {
+    /// A body at rest at `vertices` (closed, outward-oriented).
+    pub fn new(vertices: &[Vec3], faces: &[[u32; 3]], friction: f64) -> Result<Self> {
+        let surface = MeshSurface::new("body", vertices, faces)?;
+        Ok(Self {
+            surface,
+            friction,
+            start: vertices.to_vec(),
+            end: vertices.to_vec(),
+            times: (0.0, 1.0),
+            current: vertices.to_vec(),
+            velocity: vec![Vec3::zeros(); vertices.len()],
+            moved: 0.0,
+            tracks: Vec::new(),
+        })
+    }
+
+    /// Sets the keyframes the body moves between: `start` at time `t0` and `end` at `t1` (s).
+    pub fn set_keyframes(&mut self, start: &[Vec3], end: &[Vec3], t0: f64, t1: f64) -> Result<()> {
+        let n = self.surface.num_vertices();
+        if start.len() != n || end.len() != n {
+            return Err(Error::Obstacle(format!(
+                "body keyframes have {} and {} vertices, the body has {n}",
+                start.len(),
+                end.len()
+            )));
+        }
+        if let Some(i) = start
+            .iter()
+            .chain(end)
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(Error::Obstacle(format!(
+                "body keyframe vertex {} is not finite",
+                i % n
+            )));
+        }
+        if t1 <= t0 {
+            return Err(Error::Obstacle(format!("keyframe times {t0} >= {t1}")));
+        }
+        self.start.copy_from_slice(start);
+        self.end.copy_from_slice(end);
+        self.times = (t0, t1);
+        let inv = 1.0 / (t1 - t0);
+        for ((v, a), b) in self.velocity.iter_mut().zip(start).zip(end) {
+            *v = (b - a) * inv;
+        }
+        Ok(())
+    }
+
+    /// Current (interpolated) vertices.
+    pub fn vertices(&self) -> &[Vec3] {
+        &self.current
+    }
+
+    /// Signed distance of each point to the body (bounded by the query reach: points further
+    /// than `reach` outside report `reach`), using and refreshing the per-vertex tracks.
+    pub fn measure(&mut self, points: &[Vec3], reach: f64) -> Vec<f64> {
+        self.ensure_tracks(points.len());
+        let surface = &self.surface;
+        points
+            .par_iter()
+            .zip(self.tracks.par_iter())
+            .map(|(&p, track)| {
+                if track.side > 0 && track.clearance - (p - track.at).norm() > reach {
+                    return reach;
+                }
+                match surface.query(p, reach) {
+                    Some(s) => s.distance,
+                    None if track.side < 0 => surface
+                        .query(p, f64::INFINITY)
+                        .map_or(reach, |s| s.distance),
+                    None => reach,
+                }
+            })
+            .collect()
+    }
+
+    fn ensure_tracks(&mut self, n: usize) {
+        if self.tracks.len() != n {
+            self.tracks = vec![
+                Track {
+                    side: 0,
+                    clearance: 0.0,
+                    at: Vec3::zeros(),
+                };
+                n
+            ];
+        }
+    }
+}
+
+impl Obstacle for AnimatedMesh {
+    fn name(&self) -> &str {
+        "body"
+    }
+
+    fn friction(&self) -> f64 {
+        self.friction
+    }
+
+    fn advance(&mut self, time: f64) {
+        let (t0, t1) = self.times;
+        let a = ((time - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        let mut moved: f64 = 0.0;
+        for ((c, s), e) in self.current.iter_mut().zip(&self.start).zip(&self.end) {
+            let next = s + (e - s) * a;
+            moved = moved.max((next - *c).norm());
+            *c = next;
+        }
+        self.moved = moved;
+        self.surface.update(&self.current, &self.velocity);
+        // The body may have moved toward every vertex by up to `moved`.
+        for t in &mut self.tracks {
+            t.clearance = (t.clearance - moved).max(0.0);
+        }
+    }
+
+    fn surface_point(&self, p: Vec3, max_distance: f64) -> Option<SurfacePoint> {
+        self.surface.query(p, max_distance).or_else(|| {
+            self.surface
+                .query(p, f64::INFINITY)
+                .filter(|s| s.distance < 0.0)
+        })
+    }
+
+    fn detect(&mut self, input: &DetectionInput, out: &mut Vec<Contact>) {
+        let tolerance = input.params.contact_tolerance;
+        let reach = (QUERY_REACH * tolerance).max(0.03);
+        self.ensure_tracks(input.predicted.len());
+        let surface = &self.surface;
+        let friction = self.friction;
+        let found: Vec<Vec<Contact>> = input
+            .predicted
+            .par_chunks(512)
+            .zip(self.tracks.par_chunks_mut(512))
+            .enumerate()
+            .map(|(chunk, (points, tracks))| {
+                let mut local = Vec::new();
+                for (k, (&p, track)) in points.iter().zip(tracks.iter_mut()).enumerate() {
+                    let i = chunk * 512 + k;
+                    let travelled = (p - track.at).norm();
+                    if track.side > 0 && track.clearance - travelled > tolerance {
+                        continue;
+                    }
+                    let hit = match surface.query(p, reach) {
+                        Some(s) => Some(s),
+                        None if track.side <= 0 => surface.query(p, f64::INFINITY),
+                        None => None,
+                    };
+                    match hit {
+                        Some(s) => {
+                            track.side = if s.distance < 0.0 { -1 } else { 1 };
+                            track.clearance = s.distance.abs();
+                            track.at = p;
+                            if s.distance < tolerance {
+                                local.push(Contact::from_query(
+                                    i as u32,
+                                    s.distance,
+                                    s.normal,
+                                    s.velocity,
+                                    p - input.positions[i],
+                                    input.h,
+                                    friction,
+                                    input.params,
+                                ));
+                            }
+                        }
+                        None => {
+                            track.clearance = reach;
+                            track.at = p;
+                        }
+                    }
+                }
+                local
+            })
+            .collect();
+        out.extend(found.into_iter().flatten());
+    }
+}

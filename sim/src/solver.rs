@@ -1,0 +1,628 @@
+//! The projective-dynamics step with exact frictional contact (Ly et al. 2020), as named,
+//! timed stages over plain data:
+//!
+//! 1. `predict`: v* = v + h g (pinned vertices get their prescribed velocity);
+//! 2. `detect`: obstacles move to the end of the step and report contacts at x + h v*;
+//! 3. `iterate`: local projections -> right-hand side -> per-node contact impulses ->
+//!    global solve with the constant factorization, until the residual is below tolerance;
+//! 4. `finish`: x = x + h v.
+//!
+//! Velocity-level backward Euler: P v = M v* + h sum_t w_t A_t^T (p_t - A_t x_n) + r with
+//! P = M + h^2 sum_t w_t A_t^T A_t. Contacts only change r, never P.
+
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::cloth::{ClothMesh, ClothState, Vec3};
+use crate::constraints::{Attachment, BendingRest, Constraints, ProjectionInputs, Seam};
+use crate::contact::Contact;
+use crate::error::{Error, Result};
+use crate::obstacles::{DetectionInput, Obstacle};
+use crate::params::{Material, SolverParams};
+use crate::system::{GlobalSystem, Symbolic};
+
+/// Everything that defines a cloth besides its state: mesh, material and constraints.
+#[derive(Debug, Clone)]
+pub struct ClothSetup {
+    /// Mesh (its rest shape gives rest lengths and the curved bending rest state).
+    pub mesh: ClothMesh,
+    /// Material.
+    pub material: Material,
+    /// Bending rest state.
+    pub bending_rest: BendingRest,
+    /// Seams (zero-length springs) between vertex pairs.
+    pub seams: Vec<Seam>,
+    /// Springs to moving targets (set with [`Solver::set_attachment_targets`]).
+    pub attachments: Vec<Attachment>,
+    /// Pinned vertices (velocity prescribed by their target positions).
+    pub pins: Vec<u32>,
+}
+
+impl ClothSetup {
+    /// A free cloth with a flat bending rest state.
+    pub fn new(mesh: ClothMesh, material: Material) -> Self {
+        Self {
+            mesh,
+            material,
+            bending_rest: BendingRest::Flat,
+            seams: Vec::new(),
+            attachments: Vec::new(),
+            pins: Vec::new(),
+        }
+    }
+}
+
+/// Wall time spent in each stage since the last reset.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StageTimes {
+    /// Prediction and damping.
+    pub predict: Duration,
+    /// Obstacle update (BVH refit) and contact detection.
+    pub detect: Duration,
+    /// Local projections and right-hand side.
+    pub local: Duration,
+    /// Contact impulses and residuals.
+    pub contact: Duration,
+    /// Global solves.
+    pub solve: Duration,
+    /// Factorizations (new material or step size).
+    pub factorize: Duration,
+}
+
+impl StageTimes {
+    /// Adds another set of times.
+    pub fn add(&mut self, other: &StageTimes) {
+        self.predict += other.predict;
+        self.detect += other.detect;
+        self.local += other.local;
+        self.contact += other.contact;
+        self.solve += other.solve;
+        self.factorize += other.factorize;
+    }
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StepReport {
+    /// Local-global iterations run.
+    pub iterations: usize,
+    /// Final residual, m/s (largest velocity change of the last iteration or contact
+    /// Alart-Curnier residual per unit mass).
+    pub residual: f64,
+    /// Contacts in the step.
+    pub contacts: usize,
+    /// Contacts whose vertex was deeper inside an obstacle than the contact band.
+    pub deep_contacts: usize,
+    /// Deepest penetration among the contacts at the start of the step, m (0 if none).
+    pub max_depth: f64,
+}
+
+/// What one output frame did (several steps).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct FrameReport {
+    /// Steps taken (substeps x 2^retries).
+    pub steps: usize,
+    /// Iterations summed over the steps.
+    pub iterations: usize,
+    /// Largest iteration count of a step.
+    pub max_iterations: usize,
+    /// Largest final residual of a step, m/s.
+    pub max_residual: f64,
+    /// Largest contact count of a step.
+    pub contacts: usize,
+    /// Deep contacts (inside deeper than the band) summed over the steps.
+    pub deep_contacts: usize,
+    /// Deepest penetration seen at the start of a step, m.
+    pub max_depth: f64,
+    /// Retries with smaller steps this frame needed.
+    pub retries: usize,
+}
+
+struct Workspace {
+    v_star: Vec<Vec3>,
+    predicted: Vec<Vec3>,
+    positions: Vec<Vec3>,
+    ax_start: Vec<Vec3>,
+    q: Vec<Vec3>,
+    rhs: Vec<Vec3>,
+    v: Vec<Vec3>,
+    v_next: Vec<Vec3>,
+    contacts: Vec<Contact>,
+    impulses: Vec<Vec3>,
+    in_contact: Vec<bool>,
+}
+
+/// The solver: factorized system, constraints and workspace for one cloth.
+pub struct Solver {
+    setup: ClothSetup,
+    params: SolverParams,
+    frame_dt: f64,
+    masses: Vec<f64>,
+    constraints: Constraints,
+    incidence_ptr: Vec<usize>,
+    incidence: Vec<(u32, f64)>,
+    pinned: Vec<bool>,
+    pin_targets: Vec<Vec3>,
+    attachment_targets: Vec<Vec3>,
+    seam_opening: f64,
+    systems: BTreeMap<usize, GlobalSystem>,
+    symbolic: Option<Symbolic>,
+    ws: Workspace,
+    times: StageTimes,
+}
+
+impl Solver {
+    /// Validates the setup and factorizes the global matrix for `params.substeps` steps per
+    /// frame of `frame_dt` seconds.
+    pub fn new(setup: ClothSetup, params: SolverParams, frame_dt: f64) -> Result<Self> {
+        setup.material.validate()?;
+        params.validate()?;
+        if !(frame_dt.is_finite() && frame_dt > 0.0) {
+            return Err(Error::Setting(format!(
+                "frame time must be positive, got {frame_dt}"
+            )));
+        }
+        let n = setup.mesh.num_vertices();
+        for &p in &setup.pins {
+            if p as usize >= n {
+                return Err(Error::Setting(format!(
+                    "pinned vertex {p} does not exist ({n} vertices)"
+                )));
+            }
+        }
+        for s in &setup.seams {
+            if s.a as usize >= n
+                || s.b as usize >= n
+                || s.a == s.b
+                || !(s.stiffness > 0.0 && s.stiffness.is_finite())
+            {
+                return Err(Error::Setting(format!("bad seam {s:?} ({n} vertices)")));
+            }
+        }
+        for a in &setup.attachments {
+            if a.vertex as usize >= n || !(a.stiffness > 0.0 && a.stiffness.is_finite()) {
+                return Err(Error::Setting(format!(
+                    "bad attachment {a:?} ({n} vertices)"
+                )));
+            }
+        }
+        let masses = setup.mesh.lumped_masses(setup.material.density);
+        let constraints = Constraints::build(
+            &setup.mesh,
+            &setup.material,
+            setup.bending_rest,
+            &setup.seams,
+            &setup.attachments,
+        );
+        let (incidence_ptr, incidence) = constraints.incidence(n);
+        let mut pinned = vec![false; n];
+        for &p in &setup.pins {
+            pinned[p as usize] = true;
+        }
+        let pin_targets = setup.mesh.rest().to_vec();
+        let attachment_targets = setup
+            .attachments
+            .iter()
+            .map(|a| setup.mesh.rest()[a.vertex as usize])
+            .collect();
+        let terms = constraints.len();
+        let mut solver = Self {
+            params,
+            frame_dt,
+            masses,
+            constraints,
+            incidence_ptr,
+            incidence,
+            pinned,
+            pin_targets,
+            attachment_targets,
+            seam_opening: 1.0,
+            systems: BTreeMap::new(),
+            symbolic: None,
+            ws: Workspace {
+                v_star: vec![Vec3::zeros(); n],
+                predicted: vec![Vec3::zeros(); n],
+                positions: vec![Vec3::zeros(); n],
+                ax_start: vec![Vec3::zeros(); terms],
+                q: vec![Vec3::zeros(); terms],
+                rhs: vec![Vec3::zeros(); n],
+                v: vec![Vec3::zeros(); n],
+                v_next: vec![Vec3::zeros(); n],
+                contacts: Vec::new(),
+                impulses: Vec::new(),
+                in_contact: vec![false; n],
+            },
+            times: StageTimes::default(),
+            setup,
+        };
+        solver.system_for(params.substeps)?;
+        Ok(solver)
+    }
+
+    /// Replaces the material: new weights and masses, the same symbolic analysis.
+    pub fn set_material(&mut self, material: Material) -> Result<()> {
+        material.validate()?;
+        self.setup.material = material;
+        self.masses = self.setup.mesh.lumped_masses(material.density);
+        self.constraints = Constraints::build(
+            &self.setup.mesh,
+            &material,
+            self.setup.bending_rest,
+            &self.setup.seams,
+            &self.setup.attachments,
+        );
+        let (ptr, inc) = self.constraints.incidence(self.masses.len());
+        self.incidence_ptr = ptr;
+        self.incidence = inc;
+        self.systems.clear();
+        self.system_for(self.params.substeps)?;
+        Ok(())
+    }
+
+    fn system_for(&mut self, substeps: usize) -> Result<()> {
+        if !self.systems.contains_key(&substeps) {
+            let started = Instant::now();
+            let h = self.frame_dt / substeps as f64;
+            let system = GlobalSystem::new(
+                &self.masses,
+                &self.constraints,
+                h,
+                &self.pinned,
+                self.symbolic.clone(),
+            )?;
+            self.symbolic = Some(system.symbolic());
+            self.systems.insert(substeps, system);
+            self.times.factorize += started.elapsed();
+        }
+        Ok(())
+    }
+
+    /// The cloth setup.
+    pub fn setup(&self) -> &ClothSetup {
+        &self.setup
+    }
+
+    /// Solver settings.
+    pub fn params(&self) -> &SolverParams {
+        &self.params
+    }
+
+    /// Lumped vertex masses, kg.
+    pub fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+
+    /// Stage times accumulated since the last call, and resets them.
+    pub fn take_times(&mut self) -> StageTimes {
+        std::mem::take(&mut self.times)
+    }
+
+    /// Sets where pinned vertices must be at the end of the coming steps (all vertices'
+    /// targets; only pinned ones are used). Default: the rest positions.
+    pub fn set_pin_targets(&mut self, targets: &[Vec3]) {
+        self.pin_targets.copy_from_slice(targets);
+    }
+
+    /// Sets the attachments' target points, in the setup's attachment order.
+    pub fn set_attachment_targets(&mut self, targets: &[Vec3]) {
+        self.attachment_targets.copy_from_slice(targets);
+    }
+
+    /// Sets how open the seams are: 1 = no pull, 0 = fully closed (the seam ramp).
+    pub fn set_seam_opening(&mut self, opening: f64) {
+        self.seam_opening = opening.clamp(0.0, 1.0);
+    }
+
+    /// Potential energy of the constraints at `positions` (gravity excluded), J.
+    pub fn elastic_energy(&self, positions: &[Vec3]) -> f64 {
+        self.constraints.energy(positions, &self.inputs())
+    }
+
+    /// Kinetic energy of `state`, J.
+    pub fn kinetic_energy(&self, state: &ClothState) -> f64 {
+        state
+            .velocities
+            .iter()
+            .zip(&self.masses)
+            .map(|(v, m)| 0.5 * m * v.norm_squared())
+            .sum()
+    }
+
+    fn inputs(&self) -> ProjectionInputs<'_> {
+        ProjectionInputs {
+            seam_opening: self.seam_opening,
+            attachment_targets: &self.attachment_targets,
+        }
+    }
+
+    /// Advances one output frame starting at time `t0` (s): `params.substeps` steps, retried
+    /// with twice as many steps (up to `max_retries` times) if a step produces non-finite
+    /// values or a vertex faster than `max_speed`. On failure `state` is left as it was.
+    pub fn advance_frame(
+        &mut self,
+        state: &mut ClothState,
+        obstacles: &mut [Box<dyn Obstacle>],
+        t0: f64,
+        frame: usize,
+    ) -> Result<FrameReport> {
+        let saved = state.clone();
+        let mut reason = String::new();
+        for retry in 0..=self.params.max_retries {
+            let substeps = self.params.substeps << retry;
+            self.system_for(substeps)?;
+            let h = self.frame_dt / substeps as f64;
+            let mut report = FrameReport {
+                retries: retry,
+                ..FrameReport::default()
+            };
+            let mut failed = None;
+            for s in 0..substeps {
+                let step = self.step(state, obstacles, substeps, t0 + (s + 1) as f64 * h);
+                report.steps += 1;
+                report.iterations += step.iterations;
+                report.max_iterations = report.max_iterations.max(step.iterations);
+                report.max_residual = report.max_residual.max(step.residual);
+                report.contacts = report.contacts.max(step.contacts);
+                report.deep_contacts += step.deep_contacts;
+                report.max_depth = report.max_depth.max(step.max_depth);
+                if let Some(problem) = self.check(state) {
+                    failed = Some(problem);
+                    break;
+                }
+            }
+            match failed {
+                None => return Ok(report),
+                Some(problem) => {
+                    reason = problem;
+                    *state = saved.clone();
+                }
+            }
+        }
+        Err(Error::BlowUp {
+            frame,
+            reason,
+            retries: self.params.max_retries,
+        })
+    }
+
+    fn check(&self, state: &ClothState) -> Option<String> {
+        if !state.is_finite() {
+            return Some("non-finite position or velocity".into());
+        }
+        let (i, speed) = state
+            .velocities
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (i, v.norm()))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        (speed > self.params.max_speed).then(|| {
+            format!(
+                "vertex {i} reached {speed:.1} m/s (limit {} m/s): energy explosion",
+                self.params.max_speed
+            )
+        })
+    }
+
+    /// One step of length frame_dt / `substeps` ending at time `t_end`.
+    pub fn step(
+        &mut self,
+        state: &mut ClothState,
+        obstacles: &mut [Box<dyn Obstacle>],
+        substeps: usize,
+        t_end: f64,
+    ) -> StepReport {
+        let h = self.frame_dt / substeps as f64;
+        self.predict(state, h);
+        self.detect(state, obstacles, h, t_end);
+        self.damp(h);
+        let report = self.iterate(state, substeps, h);
+        // finish
+        for ((x, v), v_new) in state
+            .positions
+            .iter_mut()
+            .zip(state.velocities.iter_mut())
+            .zip(&self.ws.v)
+        {
+            *v = *v_new;
+            *x += h * v_new;
+        }
+        report
+    }
+
+    fn predict(&mut self, state: &ClothState, h: f64) {
+        let started = Instant::now();
+        let g = Vec3::new(0.0, -self.params.gravity, 0.0);
+        for i in 0..state.positions.len() {
+            let v = if self.pinned[i] {
+                (self.pin_targets[i] - state.positions[i]) / h
+            } else {
+                state.velocities[i] + h * g
+            };
+            self.ws.v_star[i] = v;
+            self.ws.predicted[i] = state.positions[i] + h * v;
+        }
+        self.times.predict += started.elapsed();
+    }
+
+    fn detect(
+        &mut self,
+        state: &ClothState,
+        obstacles: &mut [Box<dyn Obstacle>],
+        h: f64,
+        t_end: f64,
+    ) {
+        let started = Instant::now();
+        let ws = &mut self.ws;
+        ws.contacts.clear();
+        let input = DetectionInput {
+            positions: &state.positions,
+            predicted: &ws.predicted,
+            h,
+            params: &self.params,
+        };
+        for o in obstacles.iter_mut() {
+            o.advance(t_end);
+            o.detect(&input, &mut ws.contacts);
+        }
+        let pinned = &self.pinned;
+        ws.contacts.retain(|c| !pinned[c.vertex as usize]);
+        // Stable: contacts of one vertex stay in obstacle order.
+        ws.contacts.sort_by_key(|c| c.vertex);
+        ws.impulses.clear();
+        ws.impulses.resize(ws.contacts.len(), Vec3::zeros());
+        ws.in_contact.iter_mut().for_each(|c| *c = false);
+        for c in &ws.contacts {
+            ws.in_contact[c.vertex as usize] = true;
+        }
+        self.times.detect += started.elapsed();
+    }
+
+    /// Air damping, implicit: v* <- v* / (1 + alpha h), off at contact and pinned nodes.
+    fn damp(&mut self, h: f64) {
+        let alpha = self.params.air_damping;
+        if alpha == 0.0 {
+            return;
+        }
+        let factor = 1.0 / (1.0 + alpha * h);
+        for i in 0..self.ws.v_star.len() {
+            if !self.ws.in_contact[i] && !self.pinned[i] {
+                self.ws.v_star[i] *= factor;
+            }
+        }
+    }
+
+    fn iterate(&mut self, state: &ClothState, substeps: usize, h: f64) -> StepReport {
+        let n = state.positions.len();
+        let mut report = StepReport {
+            contacts: self.ws.contacts.len(),
+            ..StepReport::default()
+        };
+        for c in &self.ws.contacts {
+            let depth = -c.distance;
+            report.max_depth = report.max_depth.max(depth);
+            if depth > self.params.contact_tolerance {
+                report.deep_contacts += 1;
+            }
+        }
+        let started = Instant::now();
+        {
+            let constraints = &self.constraints;
+            let x = &state.positions;
+            self.ws
+                .ax_start
+                .par_chunks_mut(2048)
+                .enumerate()
+                .for_each(|(chunk, out)| {
+                    for (k, ax) in out.iter_mut().enumerate() {
+                        *ax = constraints.apply(chunk * 2048 + k, x);
+                    }
+                });
+        }
+        self.ws.v.copy_from_slice(&self.ws.v_star);
+        self.times.local += started.elapsed();
+
+        for iteration in 1..=self.params.max_iterations {
+            self.local_step(state, h);
+            self.contact_step(substeps);
+            let started = Instant::now();
+            for i in 0..n {
+                if self.pinned[i] {
+                    self.ws.rhs[i] = self.ws.v_star[i];
+                }
+            }
+            let system = self.systems.get_mut(&substeps).expect("system factorized");
+            system.solve(&self.ws.rhs, &mut self.ws.v_next);
+            self.times.solve += started.elapsed();
+
+            let started = Instant::now();
+            let ws = &self.ws;
+            let mut residual =
+                ws.v.iter()
+                    .zip(&ws.v_next)
+                    .map(|(a, b)| (a - b).amax())
+                    .fold(0.0, f64::max);
+            for (c, r) in ws.contacts.iter().zip(&ws.impulses) {
+                let j = c.vertex as usize;
+                residual = residual.max(c.alart_curnier(*r, ws.v_next[j], self.masses[j]));
+            }
+            std::mem::swap(&mut self.ws.v, &mut self.ws.v_next);
+            self.times.contact += started.elapsed();
+            report.iterations = iteration;
+            report.residual = residual;
+            if residual < self.params.tolerance {
+                break;
+            }
+        }
+        report
+    }
+
+    /// Projections at x = x_n + h v and the right-hand side M v* + h sum w A^T (p - A x_n),
+    /// gathered per vertex (no write conflicts, same result for any thread count).
+    fn local_step(&mut self, state: &ClothState, h: f64) {
+        let started = Instant::now();
+        let ws = &mut self.ws;
+        for ((p, x), v) in ws.positions.iter_mut().zip(&state.positions).zip(&ws.v) {
+            *p = x + h * v;
+        }
+        let inputs = ProjectionInputs {
+            seam_opening: self.seam_opening,
+            attachment_targets: &self.attachment_targets,
+        };
+        let constraints = &self.constraints;
+        let positions = &ws.positions;
+        let ax_start = &ws.ax_start;
+        ws.q.par_chunks_mut(2048)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                for (k, q) in out.iter_mut().enumerate() {
+                    let t = chunk * 2048 + k;
+                    let ax = constraints.apply(t, positions);
+                    *q = constraints.project(t, ax, &inputs) - ax_start[t];
+                }
+            });
+        let q = &ws.q;
+        let (ptr, inc) = (&self.incidence_ptr, &self.incidence);
+        let (masses, v_star) = (&self.masses, &ws.v_star);
+        ws.rhs
+            .par_chunks_mut(1024)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                for (k, rhs) in out.iter_mut().enumerate() {
+                    let i = chunk * 1024 + k;
+                    let mut sum = Vec3::zeros();
+                    for &(t, cw) in &inc[ptr[i]..ptr[i + 1]] {
+                        sum += cw * q[t as usize];
+                    }
+                    *rhs = masses[i] * v_star[i] + h * sum;
+                }
+            });
+        self.times.local += started.elapsed();
+    }
+
+    /// Per contact node: residual momentum f = rhs_j - ((P - M) v)_j, then each of its
+    /// contacts' impulse in turn (Gauss-Seidel over a node's obstacles), added to rhs_j.
+    fn contact_step(&mut self, substeps: usize) {
+        let started = Instant::now();
+        let system = &self.systems[&substeps];
+        let ws = &mut self.ws;
+        let mut k = 0;
+        while k < ws.contacts.len() {
+            let j = ws.contacts[k].vertex as usize;
+            let m = self.masses[j];
+            let mut f = ws.rhs[j] - system.row_times(j, &ws.v) + m * ws.v[j];
+            let mut total = Vec3::zeros();
+            while k < ws.contacts.len() && ws.contacts[k].vertex as usize == j {
+                let r = ws.contacts[k].impulse(f, m);
+                ws.impulses[k] = r;
+                f += r;
+                total += r;
+                k += 1;
+            }
+            ws.rhs[j] += total;
+        }
+        self.times.contact += started.elapsed();
+    }
+}

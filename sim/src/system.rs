@@ -1,0 +1,196 @@
+//! The global matrix P = M + h^2 sum_t w_t a_t a_t^T and its sparse Cholesky factorization
+//! (faer): analysed once per mesh (the symbolic part is shared between materials), factorized
+//! once per material and step size, never when contacts change.
+//!
+//! Pinned vertices are eliminated: their rows and columns are replaced by the identity in the
+//! factorized matrix and their known velocities move to the right-hand side, so pins are exact.
+//! The full symmetric matrix is kept in CSR form for the contact step, which needs single rows.
+
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Conj, Mat, MatMut, Par, Side};
+
+use crate::cloth::Vec3;
+use crate::constraints::Constraints;
+use crate::error::{Error, Result};
+
+/// Symbolic analysis of one sparsity pattern (mesh + constraints + pins), shareable.
+pub type Symbolic = Arc<SymbolicCholesky<usize>>;
+
+/// The factorized global matrix and the workspace of its solves.
+pub(crate) struct GlobalSystem {
+    n: usize,
+    row_ptr: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+    pinned: Vec<bool>,
+    symbolic: Symbolic,
+    factor: Vec<f64>,
+    scratch: [MemBuffer; 2],
+    rhs: Mat<f64>,
+}
+
+impl GlobalSystem {
+    /// Assembles and factorizes P for step `h`. `symbolic` is reused when given (it must come
+    /// from the same mesh, constraints and pins).
+    pub fn new(
+        masses: &[f64],
+        constraints: &Constraints,
+        h: f64,
+        pinned: &[bool],
+        symbolic: Option<Symbolic>,
+    ) -> Result<Self> {
+        let n = masses.len();
+        // Full symmetric entries, merged into CSR.
+        let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(n + 9 * constraints.len());
+        for (i, &m) in masses.iter().enumerate() {
+            entries.push((i as u32, i as u32, m));
+        }
+        let h2 = h * h;
+        let mut stencil = Vec::new();
+        for t in 0..constraints.len() {
+            let w = h2 * constraints.weight(t);
+            stencil.clear();
+            stencil.extend(constraints.stencil(t));
+            for &(a, ca) in &stencil {
+                for &(b, cb) in &stencil {
+                    entries.push((a as u32, b as u32, w * ca * cb));
+                }
+            }
+        }
+        entries.sort_unstable_by_key(|&(r, c, _)| (r, c));
+        let mut row_ptr = vec![0usize; n + 1];
+        let mut col: Vec<u32> = Vec::with_capacity(entries.len());
+        let mut val: Vec<f64> = Vec::with_capacity(entries.len());
+        let mut last = None;
+        for &(r, c, v) in &entries {
+            if last == Some((r, c)) {
+                *val.last_mut().expect("merged entry") += v;
+            } else {
+                col.push(c);
+                val.push(v);
+                row_ptr[r as usize + 1] += 1;
+                last = Some((r, c));
+            }
+        }
+        for i in 0..n {
+            row_ptr[i + 1] += row_ptr[i];
+        }
+
+        // Lower triangle of the reduced matrix (pins replaced by the identity).
+        let mut lower = Vec::with_capacity(val.len() / 2 + n);
+        for r in 0..n {
+            for k in row_ptr[r]..row_ptr[r + 1] {
+                let c = col[k] as usize;
+                if c > r {
+                    continue;
+                }
+                if pinned[r] || pinned[c] {
+                    if r == c {
+                        lower.push(Triplet::new(r, c, 1.0));
+                    }
+                    continue;
+                }
+                lower.push(Triplet::new(r, c, val[k]));
+            }
+        }
+        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower)
+            .map_err(|e| Error::Factorization(format!("assembly: {e:?}")))?;
+        let symbolic = match symbolic {
+            Some(s) if s.nrows() == n => s,
+            _ => Arc::new(
+                factorize_symbolic_cholesky(
+                    matrix.symbolic(),
+                    Side::Lower,
+                    Default::default(),
+                    Default::default(),
+                )
+                .map_err(|e| Error::Factorization(format!("symbolic: {e:?}")))?,
+            ),
+        };
+        let mut factor = vec![0.0; symbolic.len_val()];
+        let mut stack = MemBuffer::new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+        );
+        symbolic
+            .factorize_numeric_llt(
+                &mut factor,
+                matrix.as_ref(),
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut stack),
+                Default::default(),
+            )
+            .map_err(|e| Error::Factorization(format!("numeric: {e:?}")))?;
+        let scratch = [
+            MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
+            MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(2, Par::Seq)),
+        ];
+        Ok(Self {
+            n,
+            row_ptr,
+            col,
+            val,
+            pinned: pinned.to_vec(),
+            symbolic,
+            factor,
+            scratch,
+            rhs: Mat::zeros(n, 3),
+        })
+    }
+
+    /// The shareable symbolic analysis.
+    pub fn symbolic(&self) -> Symbolic {
+        self.symbolic.clone()
+    }
+
+    /// Row `j` of P times `v`.
+    #[inline]
+    pub fn row_times(&self, j: usize, v: &[Vec3]) -> Vec3 {
+        let mut sum = Vec3::zeros();
+        for k in self.row_ptr[j]..self.row_ptr[j + 1] {
+            sum += self.val[k] * v[self.col[k] as usize];
+        }
+        sum
+    }
+
+    /// Solves P v = rhs with pinned velocities prescribed: `rhs` holds the right-hand side on
+    /// free vertices and the prescribed velocity on pinned ones; the solution is written to
+    /// `out`. The x column is solved on one thread while y and z are solved on another; the
+    /// split is fixed, so results do not depend on the thread count.
+    pub fn solve(&mut self, rhs: &[Vec3], out: &mut [Vec3]) {
+        let n = self.n;
+        for i in 0..n {
+            let mut b = rhs[i];
+            if !self.pinned[i] {
+                for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                    let c = self.col[k] as usize;
+                    if self.pinned[c] {
+                        b -= self.val[k] * rhs[c];
+                    }
+                }
+            }
+            for c in 0..3 {
+                self.rhs[(i, c)] = b[c];
+            }
+        }
+        let llt = LltRef::<usize, f64>::new(&self.symbolic, &self.factor);
+        let (x, yz) = self.rhs.as_mut().split_at_col_mut(1);
+        let [s1, s2] = &mut self.scratch;
+        rayon::join(
+            || solve_columns(&llt, x, s1),
+            || solve_columns(&llt, yz, s2),
+        );
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = Vec3::new(self.rhs[(i, 0)], self.rhs[(i, 1)], self.rhs[(i, 2)]);
+        }
+    }
+}
+
+fn solve_columns(llt: &LltRef<'_, usize, f64>, cols: MatMut<'_, f64>, scratch: &mut MemBuffer) {
+    llt.solve_in_place_with_conj(Conj::No, cols, Par::Seq, MemStack::new(scratch));
+}
