@@ -11,6 +11,7 @@
 mod cloth;
 pub mod constraints;
 mod contact;
+pub mod drape_bench;
 mod error;
 pub mod obstacles;
 mod params;

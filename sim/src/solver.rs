@@ -24,6 +24,10 @@ use crate::obstacles::{DetectionInput, Obstacle};
 use crate::params::{Material, SolverParams};
 use crate::system::{GlobalSystem, Symbolic};
 
+/// Bending is lagged (left out of the factorized matrix) when it adds less than this share to
+/// the matrix diagonal; see `system.rs`.
+const LAGGED_BENDING_SHARE: f64 = 0.02;
+
 /// Everything that defines a cloth besides its state: mesh, material and constraints.
 #[derive(Debug, Clone)]
 pub struct ClothSetup {
@@ -149,7 +153,7 @@ pub struct Solver {
     attachment_targets: Vec<Vec3>,
     seam_opening: f64,
     systems: BTreeMap<usize, GlobalSystem>,
-    symbolic: Option<Symbolic>,
+    symbolic: [Option<Symbolic>; 2],
     ws: Workspace,
     times: StageTimes,
 }
@@ -221,7 +225,7 @@ impl Solver {
             attachment_targets,
             seam_opening: 1.0,
             systems: BTreeMap::new(),
-            symbolic: None,
+            symbolic: [None, None],
             ws: Workspace {
                 v_star: vec![Vec3::zeros(); n],
                 predicted: vec![Vec3::zeros(); n],
@@ -266,14 +270,16 @@ impl Solver {
         if !self.systems.contains_key(&substeps) {
             let started = Instant::now();
             let h = self.frame_dt / substeps as f64;
+            let lag = self.constraints.bending_share(&self.masses, h) < LAGGED_BENDING_SHARE;
             let system = GlobalSystem::new(
                 &self.masses,
                 &self.constraints,
                 h,
                 &self.pinned,
-                self.symbolic.clone(),
+                lag,
+                self.symbolic[lag as usize].clone(),
             )?;
-            self.symbolic = Some(system.symbolic());
+            self.symbolic[lag as usize] = Some(system.symbolic());
             self.systems.insert(substeps, system);
             self.times.factorize += started.elapsed();
         }
@@ -525,7 +531,8 @@ impl Solver {
         self.times.local += started.elapsed();
 
         for iteration in 1..=self.params.max_iterations {
-            self.local_step(state, h);
+            let lag = self.systems[&substeps].lags_bending();
+            self.local_step(state, h, lag);
             self.contact_step(substeps);
             let started = Instant::now();
             for i in 0..n {
@@ -561,7 +568,7 @@ impl Solver {
 
     /// Projections at x = x_n + h v and the right-hand side M v* + h sum w A^T (p - A x_n),
     /// gathered per vertex (no write conflicts, same result for any thread count).
-    fn local_step(&mut self, state: &ClothState, h: f64) {
+    fn local_step(&mut self, state: &ClothState, h: f64, lag_bending: bool) {
         let started = Instant::now();
         let ws = &mut self.ws;
         for ((p, x), v) in ws.positions.iter_mut().zip(&state.positions).zip(&ws.v) {

@@ -5,7 +5,7 @@
 //! and z. The kinds differ only in their projection p_t, each in its own file.
 
 mod attachments;
-mod bending;
+pub mod bending;
 mod seams;
 mod stretch;
 
@@ -95,6 +95,29 @@ impl Constraints {
             .iter()
             .zip(&self.coeff[range])
             .map(|(&v, &c)| (v as usize, c))
+    }
+
+    /// Whether term `t` is a bending term.
+    pub(crate) fn is_bending(&self, t: usize) -> bool {
+        matches!(self.kind[t], Kind::Bend { .. })
+    }
+
+    /// Largest diagonal entry a bending term adds to A^T W A, and the smallest diagonal entry
+    /// of the other terms plus `masses` / h^2 (to decide whether bending can be lagged).
+    pub(crate) fn bending_share(&self, masses: &[f64], h: f64) -> f64 {
+        let mut others: Vec<f64> = masses.iter().map(|m| m / (h * h)).collect();
+        let mut bending: f64 = 0.0;
+        for t in 0..self.len() {
+            for (v, c) in self.stencil(t) {
+                let d = self.weight[t] * c * c;
+                if self.is_bending(t) {
+                    bending = bending.max(d);
+                } else {
+                    others[v] += d;
+                }
+            }
+        }
+        bending / others.iter().copied().fold(f64::INFINITY, f64::min)
     }
 
     /// Weight of term `t`.
