@@ -1,7 +1,16 @@
-//! Garment templates for the engine and the surrogate (not yet implemented; see the garments
-//! issue).
+//! Garment templates for the engine and the surrogate: the garment mesh type (positions,
+//! triangles and per-corner UVs), OBJ import and export, and the built-in garments.
 //!
-//! This crate will hold the garment mesh type (positions, triangles, per-corner UVs, panel
-//! labels) with OBJ/PLY import and export and validation, the GarmentCode sewing-pattern importer
-//! that meshes, stitches and UV-maps panels into templates draped on the default body in its
-//! canonical A-pose, and the built-in parametric design library.
+//! A template is aligned to the body in its canonical A-pose (betas = 0, no root translation):
+//! its positions are where the garment rests on that body.
+#![warn(missing_docs)]
+
+mod builtin;
+mod error;
+mod mesh;
+mod obj;
+
+pub use builtin::{BUILTIN, SkirtParams, builtin_names, skirt};
+pub use error::{Error, Result};
+pub use mesh::Garment;
+pub use obj::{read_obj, write_obj};

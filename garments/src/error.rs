@@ -1,0 +1,33 @@
+//! Errors of garment loading and building, naming the file and the problem.
+
+use thiserror::Error;
+
+/// Result with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// What can go wrong with a garment.
+#[derive(Debug, Error)]
+pub enum Error {
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The file is not a usable mesh.
+    #[error("{path}: {message}")]
+    Format {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The mesh is invalid.
+    #[error("invalid garment mesh: {0}")]
+    Invalid(String),
+    /// No built-in garment of that name.
+    #[error("unknown garment '{0}' (built-in garments: {list})", list = crate::builtin_names().join(", "))]
+    Unknown(String),
+}
