@@ -41,8 +41,8 @@ impl DrapeBench {
         Self {
             n,
             params: SolverParams {
-                substeps: 4,
-                max_iterations: 10,
+                substeps: 8,
+                max_iterations: 5,
                 tolerance: 1e-4,
                 contact_tolerance: 0.01,
                 contact_offset: 0.005,

@@ -587,7 +587,13 @@ impl Solver {
                 for (k, q) in out.iter_mut().enumerate() {
                     let t = chunk * 2048 + k;
                     let ax = constraints.apply(t, positions);
-                    *q = constraints.project(t, ax, &inputs) - ax_start[t];
+                    // Lagged bending enters at the current iterate (see system.rs).
+                    let base = if lag_bending && constraints.is_bending(t) {
+                        ax
+                    } else {
+                        ax_start[t]
+                    };
+                    *q = constraints.project(t, ax, &inputs) - base;
                 }
             });
         let q = &ws.q;

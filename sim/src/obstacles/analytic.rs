@@ -57,6 +57,9 @@ impl Plane {
 }
 
 impl Obstacle for Plane {
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
     fn name(&self) -> &str {
         "plane"
     }
@@ -104,6 +107,9 @@ impl Sphere {
 }
 
 impl Obstacle for Sphere {
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
     fn name(&self) -> &str {
         "sphere"
     }
@@ -160,6 +166,9 @@ impl Cuboid {
 }
 
 impl Obstacle for Cuboid {
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
     fn name(&self) -> &str {
         "box"
     }

@@ -136,6 +136,9 @@ impl AnimatedMesh {
 }
 
 impl Obstacle for AnimatedMesh {
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
     fn name(&self) -> &str {
         "body"
     }

@@ -41,7 +41,9 @@ pub struct SurfacePoint {
 }
 
 /// Something cloth collides with.
-pub trait Obstacle: Send + Sync {
+pub trait Obstacle: Send + Sync + std::any::Any {
+    /// Downcasting access (the scene updates its body's keyframes through it).
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
     /// Short name for statistics and errors.
     fn name(&self) -> &str;
     /// Coulomb friction coefficient against cloth.

@@ -138,6 +138,9 @@ impl StaticMesh {
 }
 
 impl Obstacle for StaticMesh {
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
     fn name(&self) -> &str {
         "mesh"
     }

@@ -1,0 +1,325 @@
+//! A garment on a moving body: the scene runner.
+//!
+//! The template is draped on the default shape (betas = 0) in the canonical A-pose with no
+//! root translation. The sequence starts there (plus the motion's first root translation);
+//! during the blend-in the body morphs from betas = 0 to the scene's betas and turns from the
+//! canonical pose to the motion's first frame, while the cloth follows physically, then holds
+//! that frame for the settle frames, then plays the motion. Body keyframes are 30 fps poses;
+//! every substep interpolates them.
+
+use std::time::Instant;
+
+use motions::{BlendIn, BodyModel, FramePose, Motion, PosedBody, canonical_a_pose};
+use serde::Serialize;
+
+use crate::cloth::{ClothMesh, ClothState, Vec3};
+use crate::error::{Error, Result};
+use crate::obstacles::{AnimatedMesh, Obstacle, Plane};
+use crate::params::{Material, SolverParams};
+use crate::solver::{ClothSetup, FrameReport, Solver, StageTimes};
+
+/// Output frame rate, frames per second.
+pub const FPS: f64 = 30.0;
+
+/// Everything that defines a garment sequence.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Template rest positions (draped on the canonical body), m.
+    pub template: Vec<[f64; 3]>,
+    /// Template triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Body shape.
+    pub betas: Vec<f64>,
+    /// The motion at 30 fps (the blend-in is added by the runner).
+    pub motion: Motion,
+    /// Blend-in and settle frames.
+    pub blend: BlendIn,
+    /// Cloth material.
+    pub material: Material,
+    /// Cloth-body friction coefficient.
+    pub friction: f64,
+    /// Solver settings.
+    pub params: SolverParams,
+    /// Output frames to simulate (blend-in and settle included); `None` = the whole motion.
+    pub frames: Option<usize>,
+}
+
+/// Statistics of one output frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct FrameStats {
+    /// Frame index (0 = the template on the canonical body).
+    pub frame: usize,
+    /// Solver report of the frame's steps.
+    #[serde(flatten)]
+    pub solver: FrameReport,
+    /// Deepest cloth vertex inside the body at the end of the frame, m (0 if none).
+    pub max_penetration_m: f64,
+    /// Cloth vertices inside the body at the end of the frame.
+    pub vertices_inside: usize,
+    /// Largest edge length / rest length.
+    pub max_edge_stretch: f64,
+    /// Mean edge length / rest length.
+    pub mean_edge_stretch: f64,
+    /// Kinetic energy, J.
+    pub kinetic_energy_j: f64,
+    /// Wall time of the frame, s.
+    pub wall_s: f64,
+}
+
+/// One output frame handed to the caller.
+#[derive(Debug)]
+pub struct FrameOutput<'a> {
+    /// Frame index.
+    pub index: usize,
+    /// Garment vertex positions, m.
+    pub garment: &'a [Vec3],
+    /// Body pose of the frame (after blend-in).
+    pub pose: &'a FramePose,
+    /// Body shape of the frame (ramped during the blend-in).
+    pub betas: &'a [f64],
+    /// Posed body.
+    pub body: &'a PosedBody,
+    /// Statistics.
+    pub stats: &'a FrameStats,
+}
+
+/// Summary of a run.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct RunSummary {
+    /// Output frames (frame 0 included).
+    pub frames: usize,
+    /// Whether every output value was finite (always true for a finished run).
+    pub finite: bool,
+    /// Wall time of the simulation, s.
+    pub wall_s: f64,
+    /// Output frames per second of wall time.
+    pub frames_per_s: f64,
+    /// Largest penetration over the frames, m.
+    pub max_penetration_m: f64,
+    /// Largest count of vertices inside the body over the frames.
+    pub max_verts_inside: usize,
+    /// Largest edge stretch over the frames.
+    pub max_edge_stretch: f64,
+    /// Garment vertices.
+    pub vertices: usize,
+    /// Mean iterations per step.
+    pub mean_iterations: f64,
+    /// Deep contacts (vertices found inside deeper than the band and brought out), total.
+    pub deep_contacts: usize,
+    /// Frames that needed smaller steps.
+    pub retried_frames: usize,
+    /// Where the time went, s per stage.
+    pub stages: StageSeconds,
+    /// Time spent posing the body (forward pass), s.
+    pub posing_s: f64,
+}
+
+/// Stage times in seconds.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StageSeconds {
+    /// Prediction.
+    pub predict: f64,
+    /// Obstacle update (BVH refit) and contact detection.
+    pub detect: f64,
+    /// Local projections and right-hand side.
+    pub local: f64,
+    /// Contact impulses and residuals.
+    pub contact: f64,
+    /// Global solves.
+    pub solve: f64,
+    /// Factorizations.
+    pub factorize: f64,
+}
+
+impl From<StageTimes> for StageSeconds {
+    fn from(t: StageTimes) -> Self {
+        Self {
+            predict: t.predict.as_secs_f64(),
+            detect: t.detect.as_secs_f64(),
+            local: t.local.as_secs_f64(),
+            contact: t.contact.as_secs_f64(),
+            solve: t.solve.as_secs_f64(),
+            factorize: t.factorize.as_secs_f64(),
+        }
+    }
+}
+
+fn to_vec3(p: &[[f64; 3]]) -> Vec<Vec3> {
+    p.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect()
+}
+
+/// Edge stretch (max, mean) of `positions` against the mesh's rest lengths.
+pub fn edge_stretch(mesh: &ClothMesh, positions: &[Vec3]) -> (f64, f64) {
+    let rest = mesh.rest();
+    let (mut max, mut sum) = (0.0f64, 0.0);
+    for &[i, j] in mesh.edges() {
+        let (i, j) = (i as usize, j as usize);
+        let r = (positions[i] - positions[j]).norm() / (rest[i] - rest[j]).norm();
+        max = max.max(r);
+        sum += r;
+    }
+    (max, sum / mesh.edges().len() as f64)
+}
+
+impl Scene {
+    /// Checks the scene's values.
+    pub fn validate(&self, model: &BodyModel) -> Result<()> {
+        self.material.validate()?;
+        self.params.validate()?;
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(Error::Material(format!("friction must be finite and >= 0, got {}", self.friction)));
+        }
+        if let Some(i) = self.betas.iter().position(|b| !b.is_finite()) {
+            return Err(Error::Setting(format!("beta {i} is not finite")));
+        }
+        if self.motion.is_empty() {
+            return Err(Error::Setting("the motion has no frames".into()));
+        }
+        if let Some(k) = self.motion.frames.iter().position(|f| !f.pose.iter().chain(&f.transl).all(|v| v.is_finite())) {
+            return Err(Error::Setting(format!("motion '{}' frame {k} has a non-finite value", self.motion.name)));
+        }
+        let open = model.boundary_edge_count();
+        if open > 0 {
+            return Err(Error::Obstacle(format!(
+                "body model '{}' is not closed ({open} boundary edges): the inside test needs a closed body",
+                model.name()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The full motion the body follows (blend-in and settle prefix included).
+    pub fn body_motion(&self) -> Motion {
+        self.motion.with_blend_in(&canonical_a_pose(), self.blend)
+    }
+
+    /// Number of output frames.
+    pub fn num_frames(&self) -> usize {
+        let all = self.body_motion().len();
+        self.frames.map_or(all, |f| f.min(all))
+    }
+
+    /// Runs the scene, handing every output frame (frame 0 = the template) to `on_frame`.
+    pub fn run(
+        &self,
+        model: &BodyModel,
+        mut on_frame: impl FnMut(&FrameOutput) -> Result<()>,
+    ) -> Result<RunSummary> {
+        self.validate(model)?;
+        let started = Instant::now();
+        let motion = self.body_motion();
+        let frames = self.num_frames();
+        let target = model.shape(&self.betas)?;
+        let betas_at = |k: usize| -> Vec<f64> {
+            let ramp = if self.blend.blend_frames == 0 { 1.0 } else { (k as f64 / self.blend.blend_frames as f64).min(1.0) };
+            target.betas.iter().map(|b| b * ramp).collect()
+        };
+        let mut posing = 0.0;
+        let mut pose_frame = |k: usize| -> Result<(Vec<f64>, PosedBody)> {
+            let t = Instant::now();
+            let betas = betas_at(k);
+            let shaped = if k >= self.blend.blend_frames { target.clone() } else { model.shape(&betas)? };
+            let posed = model.pose(&shaped, &motion.frames[k])?;
+            posing += t.elapsed().as_secs_f64();
+            Ok((betas, posed))
+        };
+
+        let transl = motion.frames[0].transl;
+        let start: Vec<Vec3> = self.template.iter().map(|p| Vec3::new(p[0] + transl[0], p[1] + transl[1], p[2] + transl[2])).collect();
+        let mesh = ClothMesh::new(to_vec3(&self.template), self.triangles.clone())?;
+        let mut solver = Solver::new(ClothSetup::new(mesh.clone(), self.material), self.params, 1.0 / FPS)?;
+        let mut state = ClothState::at_rest(start);
+
+        let (mut betas, mut body) = pose_frame(0)?;
+        let body_vertices = to_vec3(&body.vertices);
+        let floor = body_vertices.iter().fold(f64::INFINITY, |a, p| a.min(p.y));
+        let mut animated = AnimatedMesh::new(&body_vertices, model.faces(), self.friction)?;
+        let mut stats = self.measure(&mesh, &state, &solver, &mut animated, 0, FrameReport::default(), 0.0);
+        on_frame(&FrameOutput { index: 0, garment: &state.positions, pose: &motion.frames[0], betas: &betas, body: &body, stats: &stats })?;
+
+        let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(animated), Box::new(Plane::ground(floor, self.friction))];
+        let mut summary = RunSummary { vertices: mesh.num_vertices(), finite: true, ..RunSummary::default() };
+        let mut steps = 0;
+        let mut iterations = 0;
+        let mut previous = body_vertices;
+        accumulate(&mut summary, &stats);
+        for k in 1..frames {
+            let frame_started = Instant::now();
+            (betas, body) = pose_frame(k)?;
+            let next = to_vec3(&body.vertices);
+            let t0 = (k - 1) as f64 / FPS;
+            body_obstacle(&mut obstacles).set_keyframes(&previous, &next, t0, t0 + 1.0 / FPS)?;
+            let report = solver.advance_frame(&mut state, &mut obstacles, t0, k)?;
+            steps += report.steps;
+            iterations += report.iterations;
+            summary.deep_contacts += report.deep_contacts;
+            summary.retried_frames += (report.retries > 0) as usize;
+            let wall = frame_started.elapsed().as_secs_f64();
+            stats = self.measure(&mesh, &state, &solver, body_obstacle(&mut obstacles), k, report, wall);
+            accumulate(&mut summary, &stats);
+            on_frame(&FrameOutput { index: k, garment: &state.positions, pose: &motion.frames[k], betas: &betas, body: &body, stats: &stats })?;
+            previous = next;
+        }
+        summary.frames = frames;
+        summary.wall_s = started.elapsed().as_secs_f64();
+        summary.frames_per_s = frames as f64 / summary.wall_s;
+        summary.mean_iterations = iterations as f64 / steps.max(1) as f64;
+        summary.stages = solver.take_times().into();
+        summary.posing_s = posing;
+        Ok(summary)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn measure(&self, mesh: &ClothMesh, state: &ClothState, solver: &Solver, body: &mut AnimatedMesh, frame: usize, report: FrameReport, wall: f64) -> FrameStats {
+        let distances = body.measure(&state.positions, 0.03);
+        let inside = distances.iter().filter(|&&d| d < 0.0).count();
+        let depth = distances.iter().fold(0.0f64, |a, &d| a.max(-d));
+        let (max_stretch, mean_stretch) = edge_stretch(mesh, &state.positions);
+        FrameStats {
+            frame,
+            solver: report,
+            max_penetration_m: depth,
+            vertices_inside: inside,
+            max_edge_stretch: max_stretch,
+            mean_edge_stretch: mean_stretch,
+            kinetic_energy_j: solver.kinetic_energy(state),
+            wall_s: wall,
+        }
+    }
+}
+
+fn accumulate(summary: &mut RunSummary, stats: &FrameStats) {
+    summary.max_penetration_m = summary.max_penetration_m.max(stats.max_penetration_m);
+    summary.max_verts_inside = summary.max_verts_inside.max(stats.vertices_inside);
+    summary.max_edge_stretch = summary.max_edge_stretch.max(stats.max_edge_stretch);
+}
+
+fn body_obstacle(obstacles: &mut [Box<dyn Obstacle>]) -> &mut AnimatedMesh {
+    obstacles[0].as_any_mut().downcast_mut::<AnimatedMesh>().expect("the first obstacle is the body")
+}
+
+/// Drapes a garment on the default shape in the canonical A-pose (no root translation):
+/// `frames` frames of settling under gravity with air damping, the body still. Returns the
+/// draped positions and the fraction of vertices still moving faster than 1 cm/s.
+pub fn drape_on_canonical_body(
+    model: &BodyModel,
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    material: Material,
+    friction: f64,
+    frames: usize,
+) -> Result<(Vec<[f64; 3]>, f64)> {
+    let shaped = model.shape(&[])?;
+    let body = model.pose(&shaped, &FramePose { pose: canonical_a_pose(), transl: [0.0; 3] })?;
+    let mesh = ClothMesh::new(to_vec3(positions), triangles.to_vec())?;
+    let params = SolverParams { substeps: 2, max_iterations: 10, air_damping: 2.0, ..SolverParams::default() };
+    let mut solver = Solver::new(ClothSetup::new(mesh.clone(), material), params, 1.0 / FPS)?;
+    let vertices = to_vec3(&body.vertices);
+    let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(AnimatedMesh::new(&vertices, model.faces(), friction)?)];
+    let mut state = ClothState::at_rest(mesh.rest().to_vec());
+    for k in 0..frames {
+        solver.advance_frame(&mut state, &mut obstacles, k as f64 / FPS, k)?;
+    }
+    let moving = state.velocities.iter().filter(|v| v.norm() > 0.01).count() as f64 / state.velocities.len() as f64;
+    Ok((state.positions.iter().map(|p| [p.x, p.y, p.z]).collect(), moving))
+}
