@@ -17,9 +17,14 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run the main job on built-in defaults: the default body through the built-in `walk`
-    /// motion, written as an MCAP sequence, OBJ frames and a JSON summary.
+    /// Run the main job on built-in defaults: the default garment on the default body through
+    /// the built-in `walk` motion, written as an MCAP sequence, OBJ frames and a JSON summary.
     Demo(DemoArgs),
+    /// Simulate a garment on a body through a motion and record the sequence as MCAP.
+    Simulate(SimulateArgs),
+    /// The standard drape scene of the peer benchmarks (1 m cloth onto a sphere), timed and
+    /// measured like ../shared/peers.
+    DrapeBench(DrapeBenchArgs),
     /// Pose a body (default body or an SMPL .npz model) and write it as OBJ in the model's
     /// vertex order.
     Body(BodyArgs),
@@ -35,13 +40,97 @@ pub struct DemoArgs {
     /// Output folder (created if missing).
     #[arg(long)]
     pub out: PathBuf,
-    /// Motion to use: a built-in name (with optional `:speed=..,amplitude=..,duration=..`).
-    #[arg(long, default_value = "walk")]
-    pub motion: String,
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Write an OBJ of every K-th frame (0 = none).
     #[arg(long, default_value_t = 15)]
     pub obj_every: usize,
     /// Also write the numbers (frames, fps, height, timing) to this JSON file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// The garment-on-body sequence to simulate.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Garment: a built-in name (`default` = `skirt`) or a template OBJ with UVs, aligned to
+    /// the default body in its canonical A-pose.
+    #[arg(long, default_value = "default")]
+    pub garment: String,
+    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
+    /// AMASS .npz file.
+    #[arg(long, default_value = "walk")]
+    pub motion: String,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Shape coefficients, comma-separated (default: zeros).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub betas: Vec<f64>,
+    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset; defaults 100, 0.2, 1e-5).
+    #[arg(long, default_value = "")]
+    pub material: String,
+    /// Cloth-body friction coefficient.
+    #[arg(long, default_value_t = 0.3)]
+    pub friction: f64,
+    /// Output frames to simulate, blend-in and settle included (default: the whole motion).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Frames blending from the canonical pose and shape into the motion's first frame.
+    #[arg(long, default_value_t = 30)]
+    pub blend_frames: usize,
+    /// Frames holding the first frame after the blend.
+    #[arg(long, default_value_t = 30)]
+    pub settle_frames: usize,
+    /// Substeps per 30 fps frame.
+    #[arg(long, default_value_t = 2)]
+    pub substeps: usize,
+    /// Maximum solver iterations per substep.
+    #[arg(long, default_value_t = 10)]
+    pub iterations: usize,
+}
+
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output recording (.mcap).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also record the body vertices of every frame (large).
+    #[arg(long)]
+    pub body_vertices: bool,
+    /// Write every frame's garment (and body) as OBJ into this folder.
+    #[arg(long)]
+    pub obj_dir: Option<PathBuf>,
+    /// With --obj-dir, write every K-th frame.
+    #[arg(long, default_value_t = 1)]
+    pub obj_every: usize,
+    /// Write the run's statistics (`frames`, `finite`, `wall_s`, `frames_per_s`,
+    /// `max_penetration_m`, `max_verts_inside`, `max_edge_stretch`, `vertices`, ...) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct DrapeBenchArgs {
+    /// Vertices per side of the cloth grid.
+    #[arg(long, default_value_t = 64)]
+    pub n: usize,
+    /// Substeps per 30 fps frame.
+    #[arg(long, default_value_t = 8)]
+    pub substeps: usize,
+    /// Iterations per substep.
+    #[arg(long, default_value_t = 5)]
+    pub iterations: usize,
+    /// Folder for the final vertices (`final_n<N>.npy`, z-up, grid order i*n+j as the peers)
+    /// and the result JSON.
+    #[arg(long, default_value = "out/drape-bench")]
+    pub out: PathBuf,
+    /// Also write the result (the peers' keys: `n`, `t_sim_2s_wall_s`, `verts_inside_sphere`,
+    /// `max_edge_stretch`, `p99_edge_stretch`, `drape_proxy`, `lowest_z_m`, `finite`) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }

@@ -80,3 +80,54 @@ impl BodyParams {
         Ok(params)
     }
 }
+
+/// A material from `k_s=..,rho=..,k_b=..` (any subset, the rest default), checked.
+pub fn material(text: &str) -> Result<sim::Material> {
+    let mut m = sim::Material::default();
+    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let (key, value) = part.split_once('=').with_context(|| {
+            format!("--material: '{part}' is not key=value (keys k_s, rho, k_b)")
+        })?;
+        let value: f64 = value
+            .trim()
+            .parse()
+            .with_context(|| format!("--material: '{value}' is not a number"))?;
+        match key.trim() {
+            "k_s" => m.stretch = value,
+            "rho" => m.density = value,
+            "k_b" => m.bending = value,
+            other => bail!("--material: unknown key '{other}' (keys k_s N/m, rho kg/m^2, k_b N m)"),
+        }
+    }
+    m.validate()?;
+    Ok(m)
+}
+
+/// A garment template: an OBJ file with UVs, or a built-in garment fitted to `model` in its
+/// canonical pose and draped there (1.5 s of settling).
+pub fn garment(source: &str, model: &BodyModel) -> Result<garments::Garment> {
+    let path = Path::new(source);
+    if source.ends_with(".obj") || path.exists() {
+        return Ok(garments::read_obj(path)?);
+    }
+    let shaped = model.shape(&[])?;
+    let canonical = motions::FramePose {
+        pose: motions::canonical_a_pose(),
+        transl: [0.0; 3],
+    };
+    let body = model.pose(&shaped, &canonical)?;
+    let raw = garments::skirt(source, &body.vertices, &garments::SkirtParams::default())?;
+    let (draped, _) = sim::scene::drape_on_canonical_body(
+        model,
+        &raw.positions,
+        &raw.triangles,
+        sim::Material::default(),
+        0.5,
+        45,
+    )
+    .with_context(|| format!("draping built-in garment '{source}'"))?;
+    Ok(garments::Garment {
+        positions: draped,
+        ..raw
+    })
+}

@@ -55,19 +55,26 @@ fn demo_writes_a_readable_sequence_and_summary() {
         out.to_str().unwrap(),
         "--motion",
         "walk:duration=1",
+        "--frames",
+        "8",
+        "--obj-every",
+        "4",
     ]);
     assert!(stdout.contains("default body"), "{stdout}");
     let summary = json(&out.join("summary.json"));
-    assert_eq!(
-        summary["frames"], 90,
-        "30 blend + 30 settle + 30 motion frames"
-    );
-    assert_eq!(summary["boundary_edges"], 0);
-    let counts = topics(&out.join("body.mcap"));
-    assert_eq!(counts["/body/vertices"], 90);
-    assert_eq!(counts["/body/pose"], 90);
-    assert_eq!(counts["/body/faces"], 1);
-    assert!(out.join("frames/body_0000.obj").exists());
+    assert_eq!(summary["frames"], 8);
+    assert_eq!(summary["finite"], true);
+    let counts = topics(&out.join("sequence.mcap"));
+    assert_eq!(counts["/garment/vertices"], 8);
+    assert_eq!(counts["/body/pose"], 8);
+    assert_eq!(counts["/sim/stats"], 8);
+    assert_eq!(counts["/sequence/meta"], 1);
+    assert_eq!(counts["/garment/template/uvs"], 1);
+    let recording = sim::recording::Recording::read(&out.join("sequence.mcap")).unwrap();
+    assert_eq!(recording.garment.len(), 8);
+    assert_eq!(recording.meta.unwrap().material.k_s_n_per_m, 100.0);
+    assert!(out.join("frames/garment_0004.obj").exists());
+    assert!(out.join("frames/body_0004.obj").exists());
     assert!(
         std::fs::read_dir(&out).unwrap().all(|e| !e
             .unwrap()
@@ -75,6 +82,98 @@ fn demo_writes_a_readable_sequence_and_summary() {
             .to_string_lossy()
             .ends_with(".tmp"))
     );
+}
+
+#[test]
+fn simulate_reports_the_checked_keys_and_rejects_bad_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let seq = dir.path().join("seq.mcap");
+    let stats = dir.path().join("stats.json");
+    ok(&[
+        "simulate",
+        "--motion",
+        "jumping_jacks:duration=1",
+        "--betas",
+        "1.5,0.5",
+        "--material",
+        "k_s=150,rho=0.3,k_b=1e-6",
+        "--friction",
+        "0",
+        "--frames",
+        "6",
+        "--out",
+        seq.to_str().unwrap(),
+        "--json",
+        stats.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let j = json(&stats);
+    for key in [
+        "frames",
+        "finite",
+        "wall_s",
+        "frames_per_s",
+        "max_penetration_m",
+        "max_verts_inside",
+        "max_edge_stretch",
+        "vertices",
+    ] {
+        assert!(j.get(key).is_some(), "missing key {key} in {j}");
+    }
+    assert_eq!(j["frames"], 6);
+    for (flags, expected) in [
+        (vec!["--material", "k_s=-1"], "k_s"),
+        (vec!["--material", "rho=0"], "rho"),
+        (vec!["--material", "k_b=abc"], "not a number"),
+        (vec!["--friction=-0.5"], "friction"),
+        (vec!["--motion", "missing.npz"], "missing.npz"),
+        (vec!["--garment", "missing.obj"], "missing.obj"),
+        (vec!["--garment", "cape"], "unknown garment"),
+    ] {
+        let mut args = vec![
+            "simulate",
+            "--frames",
+            "2",
+            "--out",
+            seq.to_str().unwrap(),
+            "--quiet",
+        ];
+        args.extend(flags);
+        let err = fails(&args);
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn drape_bench_writes_the_peer_keys_and_npy() {
+    let dir = tempfile::tempdir().unwrap();
+    let result = dir.path().join("r.json");
+    ok(&[
+        "drape-bench",
+        "--n",
+        "12",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--json",
+        result.to_str().unwrap(),
+    ]);
+    let j = json(&result);
+    for key in [
+        "n",
+        "t_sim_2s_wall_s",
+        "verts_inside_sphere",
+        "max_edge_stretch",
+        "p99_edge_stretch",
+        "drape_proxy",
+        "lowest_z_m",
+        "finite",
+    ] {
+        assert!(j.get(key).is_some(), "missing key {key} in {j}");
+    }
+    assert_eq!(j["verts_inside_sphere"], 0);
+    let npy = std::fs::read(dir.path().join("final_n12.npy")).unwrap();
+    assert!(npy.starts_with(b"\x93NUMPY"));
+    assert!(npy.len() > 12 * 12 * 3 * 8);
 }
 
 #[test]

@@ -33,7 +33,13 @@ pub struct SkirtParams {
 
 impl Default for SkirtParams {
     fn default() -> Self {
-        Self { length: 0.5, gap: 0.01, flare: 0.15, columns: 112, rings: 45 }
+        Self {
+            length: 0.5,
+            gap: 0.01,
+            flare: 0.15,
+            columns: 112,
+            rings: 45,
+        }
     }
 }
 
@@ -48,10 +54,16 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
     if !BUILTIN.contains(&name) {
         return Err(Error::Unknown(name.to_string()));
     }
-    if body.is_empty() || params.columns < 8 || params.rings < 2 || !(params.length > 0.0) {
-        return Err(Error::Invalid("skirt needs a body and at least 8 columns and 2 rings".into()));
+    if body.is_empty() || params.columns < 8 || params.rings < 2 || params.length.is_nan() || params.length <= 0.0 {
+        return Err(Error::Invalid(
+            "skirt needs a body and at least 8 columns and 2 rings".into(),
+        ));
     }
-    let (lo, hi) = body.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[1]), b.max(p[1])));
+    let (lo, hi) = body
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p[1]), b.max(p[1]))
+        });
     let height = hi - lo;
     let near_axis = |p: &[f64; 3], cz: f64| p[0].hypot(p[2] - cz) < TORSO_REACH;
     // Axis: centre of the torso's depth around hip height.
@@ -81,7 +93,10 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
     let dy = params.length / (params.rings - 1) as f64;
     let mut outline = vec![0.0f64; BINS];
     let mut radii = Vec::with_capacity(params.rings);
-    let mut sorted: Vec<&[f64; 3]> = body.iter().filter(|p| p[1] <= top + 0.02 && near_axis(p, cz)).collect();
+    let mut sorted: Vec<&[f64; 3]> = body
+        .iter()
+        .filter(|p| p[1] <= top + 0.02 && near_axis(p, cz))
+        .collect();
     sorted.sort_by(|a, b| b[1].total_cmp(&a[1]));
     let mut next = 0;
     for r in 0..params.rings {
@@ -95,7 +110,11 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
         }
         // Smooth: each bin takes the max of its neighbours (closes gaps between legs' bins).
         let smoothed: Vec<f64> = (0..BINS)
-            .map(|b| (0..5).map(|d| outline[(b + BINS + d - 2) % BINS]).fold(0.0, f64::max))
+            .map(|b| {
+                (0..5)
+                    .map(|d| outline[(b + BINS + d - 2) % BINS])
+                    .fold(0.0, f64::max)
+            })
             .collect();
         radii.push(smoothed);
     }
@@ -108,7 +127,14 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
         let b = bins[((i as isize) + 1).rem_euclid(BINS as isize) as usize];
         a + (b - a) * f + params.gap + params.flare * ring as f64 * dy
     };
-    let mut g = tube(name, radius, [0.0, top, cz], dy, params.rings, params.columns);
+    let mut g = tube(
+        name,
+        radius,
+        [0.0, top, cz],
+        dy,
+        params.rings,
+        params.columns,
+    );
     g.name = "skirt".into();
     g.validate()?;
     Ok(g)
@@ -116,28 +142,45 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
 
 /// A tube of staggered rings (near-equilateral triangles) around the vertical axis through
 /// `center`: ring r at height center.y - r dy with radius `radius(r, theta)`, theta = 0 at +z.
-pub(crate) fn tube(name: &str, radius: impl Fn(usize, f64) -> f64, center: [f64; 3], dy: f64, rings: usize, columns: usize) -> Garment {
+pub(crate) fn tube(
+    name: &str,
+    radius: impl Fn(usize, f64) -> f64,
+    center: [f64; 3],
+    dy: f64,
+    rings: usize,
+    columns: usize,
+) -> Garment {
     let shift = |r: usize| if r % 2 == 1 { 0.5 } else { 0.0 };
     let mut positions = Vec::with_capacity(rings * columns);
     for r in 0..rings {
         for c in 0..columns {
             let theta = TAU * (c as f64 + shift(r)) / columns as f64;
             let rad = radius(r, theta);
-            positions.push([center[0] + rad * theta.sin(), center[1] - r as f64 * dy, center[2] + rad * theta.cos()]);
+            positions.push([
+                center[0] + rad * theta.sin(),
+                center[1] - r as f64 * dy,
+                center[2] + rad * theta.cos(),
+            ]);
         }
     }
     // UVs: columns + 1 per ring (the seam column repeats), u over the unrolled circumference,
     // v down the length, both scaled by the same factor.
     let span = columns as f64 + 0.5;
-    let circumference: f64 = (0..columns).map(|c| {
-        let (a, b) = (positions[c], positions[(c + 1) % columns]);
-        ((a[0] - b[0]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-    }).sum::<f64>().max(dy * (rings - 1) as f64);
+    let circumference: f64 = (0..columns)
+        .map(|c| {
+            let (a, b) = (positions[c], positions[(c + 1) % columns]);
+            ((a[0] - b[0]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .sum::<f64>()
+        .max(dy * (rings - 1) as f64);
     let v_scale = 1.0 / circumference;
     let mut uvs = Vec::with_capacity(rings * (columns + 1));
     for r in 0..rings {
         for c in 0..=columns {
-            uvs.push([(c as f64 + shift(r)) / span, (r as f64 * dy * v_scale).min(1.0)]);
+            uvs.push([
+                (c as f64 + shift(r)) / span,
+                (r as f64 * dy * v_scale).min(1.0),
+            ]);
         }
     }
     let p = |r: usize, c: usize| (r * columns + c % columns) as u32;
@@ -147,9 +190,15 @@ pub(crate) fn tube(name: &str, radius: impl Fn(usize, f64) -> f64, center: [f64;
     for r in 0..rings - 1 {
         for c in 0..columns {
             let (first, second) = if r % 2 == 0 {
-                ([(r, c), (r + 1, c), (r, c + 1)], [(r, c + 1), (r + 1, c), (r + 1, c + 1)])
+                (
+                    [(r, c), (r + 1, c), (r, c + 1)],
+                    [(r, c + 1), (r + 1, c), (r + 1, c + 1)],
+                )
             } else {
-                ([(r, c), (r + 1, c + 1), (r, c + 1)], [(r, c), (r + 1, c), (r + 1, c + 1)])
+                (
+                    [(r, c), (r + 1, c + 1), (r, c + 1)],
+                    [(r, c), (r + 1, c), (r + 1, c + 1)],
+                )
             };
             for tri in [first, second] {
                 triangles.push(tri.map(|(r, c)| p(r, c)));
@@ -157,7 +206,13 @@ pub(crate) fn tube(name: &str, radius: impl Fn(usize, f64) -> f64, center: [f64;
             }
         }
     }
-    Garment { name: name.to_string(), positions, triangles, uvs, uv_triangles }
+    Garment {
+        name: name.to_string(),
+        positions,
+        triangles,
+        uvs,
+        uv_triangles,
+    }
 }
 
 #[cfg(test)]
@@ -179,9 +234,16 @@ mod tests {
             let [a, b, c] = tri.map(|v| g.positions[v as usize]);
             let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+            let n = [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ];
             let mid = [(a[0] + b[0] + c[0]) / 3.0, (a[2] + b[2] + c[2]) / 3.0];
-            assert!(n[0] * mid[0] + n[2] * mid[1] > 0.0, "triangle {tri:?} faces inward");
+            assert!(
+                n[0] * mid[0] + n[2] * mid[1] > 0.0,
+                "triangle {tri:?} faces inward"
+            );
         }
     }
 
@@ -189,10 +251,12 @@ mod tests {
     fn skirt_clears_a_cylinder_body() {
         // A stand-in body: a vertical cylinder of radius 0.15 from y = 0 to 1.7.
         let body: Vec<[f64; 3]> = (0..170)
-            .flat_map(|k| (0..36).map(move |a| {
-                let t = a as f64 / 36.0 * TAU;
-                [0.15 * t.sin(), k as f64 * 0.01, 0.15 * t.cos()]
-            }))
+            .flat_map(|k| {
+                (0..36).map(move |a| {
+                    let t = a as f64 / 36.0 * TAU;
+                    [0.15 * t.sin(), k as f64 * 0.01, 0.15 * t.cos()]
+                })
+            })
             .collect();
         let g = skirt("default", &body, &SkirtParams::default()).unwrap();
         assert_eq!(g.positions.len(), 112 * 45);
@@ -200,6 +264,11 @@ mod tests {
             let r = p[0].hypot(p[2]);
             assert!(r > 0.15 + 0.009, "vertex at radius {r} is within the gap");
         }
-        assert!(skirt("cape", &body, &SkirtParams::default()).unwrap_err().to_string().contains("unknown garment"));
+        assert!(
+            skirt("cape", &body, &SkirtParams::default())
+                .unwrap_err()
+                .to_string()
+                .contains("unknown garment")
+        );
     }
 }

@@ -25,8 +25,15 @@ impl Garment {
         if self.triangles.is_empty() {
             return Err(Error::Invalid(format!("'{}' has no triangles", self.name)));
         }
-        if let Some(i) = self.positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(Error::Invalid(format!("'{}': vertex {i} is not finite", self.name)));
+        if let Some(i) = self
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(Error::Invalid(format!(
+                "'{}': vertex {i} is not finite",
+                self.name
+            )));
         }
         if self.uv_triangles.len() != self.triangles.len() {
             return Err(Error::Invalid(format!(
@@ -37,19 +44,29 @@ impl Garment {
             )));
         }
         for (t, (tri, uv)) in self.triangles.iter().zip(&self.uv_triangles).enumerate() {
-            if tri.iter().any(|&v| v as usize >= n) || uv.iter().any(|&v| v as usize >= self.uvs.len()) {
-                return Err(Error::Invalid(format!("'{}': triangle {t} has an index out of range", self.name)));
+            if tri.iter().any(|&v| v as usize >= n)
+                || uv.iter().any(|&v| v as usize >= self.uvs.len())
+            {
+                return Err(Error::Invalid(format!(
+                    "'{}': triangle {t} has an index out of range",
+                    self.name
+                )));
             }
             if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
-                return Err(Error::Invalid(format!("'{}': triangle {t} repeats a vertex", self.name)));
+                return Err(Error::Invalid(format!(
+                    "'{}': triangle {t} repeats a vertex",
+                    self.name
+                )));
             }
         }
-        if let Some(i) = self
-            .uvs
-            .iter()
-            .position(|uv| !uv.iter().all(|c| c.is_finite() && (-1e-9..=1.0 + 1e-9).contains(c)))
-        {
-            return Err(Error::Invalid(format!("'{}': UV {i} {:?} is outside [0, 1]", self.name, self.uvs[i])));
+        if let Some(i) = self.uvs.iter().position(|uv| {
+            !uv.iter()
+                .all(|c| c.is_finite() && (-1e-9..=1.0 + 1e-9).contains(c))
+        }) {
+            return Err(Error::Invalid(format!(
+                "'{}': UV {i} {:?} is outside [0, 1]",
+                self.name, self.uvs[i]
+            )));
         }
         Ok(())
     }

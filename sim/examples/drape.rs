@@ -1,6 +1,9 @@
 //! Runs the drape bench: `cargo run --release -p sim --example drape -- 64 4 10`.
 fn main() {
-    let args: Vec<usize> = std::env::args().skip(1).map(|a| a.parse().unwrap()).collect();
+    let args: Vec<usize> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse().unwrap())
+        .collect();
     let mut bench = sim::drape_bench::DrapeBench::new(*args.first().unwrap_or(&64));
     if let Some(&s) = args.get(1) {
         bench.params.substeps = s;

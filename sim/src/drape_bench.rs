@@ -66,7 +66,11 @@ impl DrapeBench {
         let n = self.n;
         let mesh = ClothMesh::grid(n, 1.0, CLOTH_HEIGHT)?;
         let setup_started = Instant::now();
-        let mut solver = Solver::new(ClothSetup::new(mesh.clone(), Self::material()), self.params, 1.0 / 30.0)?;
+        let mut solver = Solver::new(
+            ClothSetup::new(mesh.clone(), Self::material()),
+            self.params,
+            1.0 / 30.0,
+        )?;
         let setup_s = setup_started.elapsed().as_secs_f64();
         let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(Sphere::new(
             Vec3::new(0.0, SPHERE_CENTER_HEIGHT, 0.0),
@@ -78,7 +82,8 @@ impl DrapeBench {
         let mut iterations = 0;
         let started = Instant::now();
         for frame in 0..60 {
-            let report = solver.advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame)?;
+            let report =
+                solver.advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame)?;
             iterations += report.iterations;
             trajectory.push(state.positions.clone());
         }
@@ -134,7 +139,9 @@ impl DrapeMeasures {
                 for (a, b) in [(i + 1, j), (i, j + 1)] {
                     if a < n && b < n {
                         let (p, q) = (id(i, j), id(a, b));
-                        ratios.push((positions[p] - positions[q]).norm() / (rest[p] - rest[q]).norm());
+                        ratios.push(
+                            (positions[p] - positions[q]).norm() / (rest[p] - rest[q]).norm(),
+                        );
                     }
                 }
             }
@@ -148,7 +155,9 @@ impl DrapeMeasures {
         Self {
             finite: positions.iter().all(|p| p.iter().all(|c| c.is_finite())),
             verts_inside_sphere: distances.iter().filter(|&&d| d < SPHERE_RADIUS).count(),
-            min_dist_to_sphere_surface_m: distances.iter().fold(f64::INFINITY, |a, &d| a.min(d - SPHERE_RADIUS)),
+            min_dist_to_sphere_surface_m: distances
+                .iter()
+                .fold(f64::INFINITY, |a, &d| a.min(d - SPHERE_RADIUS)),
             max_edge_stretch: sorted[sorted.len() - 1],
             p99_edge_stretch: p99,
             mean_edge_stretch: ratios.iter().sum::<f64>() / ratios.len() as f64,

@@ -15,6 +15,7 @@ pub mod drape_bench;
 mod error;
 pub mod obstacles;
 mod params;
+pub mod recording;
 pub mod scene;
 mod solver;
 mod system;

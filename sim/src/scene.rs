@@ -10,7 +10,7 @@
 use std::time::Instant;
 
 use motions::{BlendIn, BodyModel, FramePose, Motion, PosedBody, canonical_a_pose};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::error::{Error, Result};
@@ -45,7 +45,7 @@ pub struct Scene {
 }
 
 /// Statistics of one output frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct FrameStats {
     /// Frame index (0 = the template on the canonical body).
     pub frame: usize,
@@ -167,7 +167,10 @@ impl Scene {
         self.material.validate()?;
         self.params.validate()?;
         if !(self.friction.is_finite() && self.friction >= 0.0) {
-            return Err(Error::Material(format!("friction must be finite and >= 0, got {}", self.friction)));
+            return Err(Error::Material(format!(
+                "friction must be finite and >= 0, got {}",
+                self.friction
+            )));
         }
         if let Some(i) = self.betas.iter().position(|b| !b.is_finite()) {
             return Err(Error::Setting(format!("beta {i} is not finite")));
@@ -175,8 +178,16 @@ impl Scene {
         if self.motion.is_empty() {
             return Err(Error::Setting("the motion has no frames".into()));
         }
-        if let Some(k) = self.motion.frames.iter().position(|f| !f.pose.iter().chain(&f.transl).all(|v| v.is_finite())) {
-            return Err(Error::Setting(format!("motion '{}' frame {k} has a non-finite value", self.motion.name)));
+        if let Some(k) = self
+            .motion
+            .frames
+            .iter()
+            .position(|f| !f.pose.iter().chain(&f.transl).all(|v| v.is_finite()))
+        {
+            return Err(Error::Setting(format!(
+                "motion '{}' frame {k} has a non-finite value",
+                self.motion.name
+            )));
         }
         let open = model.boundary_edge_count();
         if open > 0 {
@@ -211,34 +222,72 @@ impl Scene {
         let frames = self.num_frames();
         let target = model.shape(&self.betas)?;
         let betas_at = |k: usize| -> Vec<f64> {
-            let ramp = if self.blend.blend_frames == 0 { 1.0 } else { (k as f64 / self.blend.blend_frames as f64).min(1.0) };
+            let ramp = if self.blend.blend_frames == 0 {
+                1.0
+            } else {
+                (k as f64 / self.blend.blend_frames as f64).min(1.0)
+            };
             target.betas.iter().map(|b| b * ramp).collect()
         };
         let mut posing = 0.0;
         let mut pose_frame = |k: usize| -> Result<(Vec<f64>, PosedBody)> {
             let t = Instant::now();
             let betas = betas_at(k);
-            let shaped = if k >= self.blend.blend_frames { target.clone() } else { model.shape(&betas)? };
+            let shaped = if k >= self.blend.blend_frames {
+                target.clone()
+            } else {
+                model.shape(&betas)?
+            };
             let posed = model.pose(&shaped, &motion.frames[k])?;
             posing += t.elapsed().as_secs_f64();
             Ok((betas, posed))
         };
 
         let transl = motion.frames[0].transl;
-        let start: Vec<Vec3> = self.template.iter().map(|p| Vec3::new(p[0] + transl[0], p[1] + transl[1], p[2] + transl[2])).collect();
+        let start: Vec<Vec3> = self
+            .template
+            .iter()
+            .map(|p| Vec3::new(p[0] + transl[0], p[1] + transl[1], p[2] + transl[2]))
+            .collect();
         let mesh = ClothMesh::new(to_vec3(&self.template), self.triangles.clone())?;
-        let mut solver = Solver::new(ClothSetup::new(mesh.clone(), self.material), self.params, 1.0 / FPS)?;
+        let mut solver = Solver::new(
+            ClothSetup::new(mesh.clone(), self.material),
+            self.params,
+            1.0 / FPS,
+        )?;
         let mut state = ClothState::at_rest(start);
 
         let (mut betas, mut body) = pose_frame(0)?;
         let body_vertices = to_vec3(&body.vertices);
         let floor = body_vertices.iter().fold(f64::INFINITY, |a, p| a.min(p.y));
         let mut animated = AnimatedMesh::new(&body_vertices, model.faces(), self.friction)?;
-        let mut stats = self.measure(&mesh, &state, &solver, &mut animated, 0, FrameReport::default(), 0.0);
-        on_frame(&FrameOutput { index: 0, garment: &state.positions, pose: &motion.frames[0], betas: &betas, body: &body, stats: &stats })?;
+        let mut stats = self.measure(
+            &mesh,
+            &state,
+            &solver,
+            &mut animated,
+            0,
+            FrameReport::default(),
+            0.0,
+        );
+        on_frame(&FrameOutput {
+            index: 0,
+            garment: &state.positions,
+            pose: &motion.frames[0],
+            betas: &betas,
+            body: &body,
+            stats: &stats,
+        })?;
 
-        let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(animated), Box::new(Plane::ground(floor, self.friction))];
-        let mut summary = RunSummary { vertices: mesh.num_vertices(), finite: true, ..RunSummary::default() };
+        let mut obstacles: Vec<Box<dyn Obstacle>> = vec![
+            Box::new(animated),
+            Box::new(Plane::ground(floor, self.friction)),
+        ];
+        let mut summary = RunSummary {
+            vertices: mesh.num_vertices(),
+            finite: true,
+            ..RunSummary::default()
+        };
         let mut steps = 0;
         let mut iterations = 0;
         let mut previous = body_vertices;
@@ -255,9 +304,24 @@ impl Scene {
             summary.deep_contacts += report.deep_contacts;
             summary.retried_frames += (report.retries > 0) as usize;
             let wall = frame_started.elapsed().as_secs_f64();
-            stats = self.measure(&mesh, &state, &solver, body_obstacle(&mut obstacles), k, report, wall);
+            stats = self.measure(
+                &mesh,
+                &state,
+                &solver,
+                body_obstacle(&mut obstacles),
+                k,
+                report,
+                wall,
+            );
             accumulate(&mut summary, &stats);
-            on_frame(&FrameOutput { index: k, garment: &state.positions, pose: &motion.frames[k], betas: &betas, body: &body, stats: &stats })?;
+            on_frame(&FrameOutput {
+                index: k,
+                garment: &state.positions,
+                pose: &motion.frames[k],
+                betas: &betas,
+                body: &body,
+                stats: &stats,
+            })?;
             previous = next;
         }
         summary.frames = frames;
@@ -270,7 +334,16 @@ impl Scene {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn measure(&self, mesh: &ClothMesh, state: &ClothState, solver: &Solver, body: &mut AnimatedMesh, frame: usize, report: FrameReport, wall: f64) -> FrameStats {
+    fn measure(
+        &self,
+        mesh: &ClothMesh,
+        state: &ClothState,
+        solver: &Solver,
+        body: &mut AnimatedMesh,
+        frame: usize,
+        report: FrameReport,
+        wall: f64,
+    ) -> FrameStats {
         let distances = body.measure(&state.positions, 0.03);
         let inside = distances.iter().filter(|&&d| d < 0.0).count();
         let depth = distances.iter().fold(0.0f64, |a, &d| a.max(-d));
@@ -295,7 +368,10 @@ fn accumulate(summary: &mut RunSummary, stats: &FrameStats) {
 }
 
 fn body_obstacle(obstacles: &mut [Box<dyn Obstacle>]) -> &mut AnimatedMesh {
-    obstacles[0].as_any_mut().downcast_mut::<AnimatedMesh>().expect("the first obstacle is the body")
+    obstacles[0]
+        .as_any_mut()
+        .downcast_mut::<AnimatedMesh>()
+        .expect("the first obstacle is the body")
 }
 
 /// Drapes a garment on the default shape in the canonical A-pose (no root translation):
@@ -310,16 +386,35 @@ pub fn drape_on_canonical_body(
     frames: usize,
 ) -> Result<(Vec<[f64; 3]>, f64)> {
     let shaped = model.shape(&[])?;
-    let body = model.pose(&shaped, &FramePose { pose: canonical_a_pose(), transl: [0.0; 3] })?;
+    let body = model.pose(
+        &shaped,
+        &FramePose {
+            pose: canonical_a_pose(),
+            transl: [0.0; 3],
+        },
+    )?;
     let mesh = ClothMesh::new(to_vec3(positions), triangles.to_vec())?;
-    let params = SolverParams { substeps: 2, max_iterations: 10, air_damping: 2.0, ..SolverParams::default() };
+    let params = SolverParams {
+        substeps: 2,
+        max_iterations: 20,
+        air_damping: 2.0,
+        ..SolverParams::default()
+    };
     let mut solver = Solver::new(ClothSetup::new(mesh.clone(), material), params, 1.0 / FPS)?;
     let vertices = to_vec3(&body.vertices);
-    let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(AnimatedMesh::new(&vertices, model.faces(), friction)?)];
+    let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(AnimatedMesh::new(
+        &vertices,
+        model.faces(),
+        friction,
+    )?)];
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     for k in 0..frames {
         solver.advance_frame(&mut state, &mut obstacles, k as f64 / FPS, k)?;
     }
-    let moving = state.velocities.iter().filter(|v| v.norm() > 0.01).count() as f64 / state.velocities.len() as f64;
-    Ok((state.positions.iter().map(|p| [p.x, p.y, p.z]).collect(), moving))
+    let moving = state.velocities.iter().filter(|v| v.norm() > 0.01).count() as f64
+        / state.velocities.len() as f64;
+    Ok((
+        state.positions.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        moving,
+    ))
 }

@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::constraints::{Attachment, BendingRest, Constraints, ProjectionInputs, Seam};
@@ -27,6 +27,13 @@ use crate::system::{GlobalSystem, Symbolic};
 /// Bending is lagged (left out of the factorized matrix) when it adds less than this share to
 /// the matrix diagonal; see `system.rs`.
 const LAGGED_BENDING_SHARE: f64 = 0.02;
+
+/// Share of the coupling to free neighbours counted in a contact node's effective mass (see
+/// `contact_step`).
+const COUPLING_SHARE: f64 = 0.3;
+
+/// Under-relaxation of the contact impulses between iterations (see `contact_step`).
+const IMPULSE_RELAXATION: f64 = 0.5;
 
 /// Everything that defines a cloth besides its state: mesh, material and constraints.
 #[derive(Debug, Clone)]
@@ -105,7 +112,7 @@ pub struct StepReport {
 }
 
 /// What one output frame did (several steps).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct FrameReport {
     /// Steps taken (substeps x 2^retries).
     pub steps: usize,
@@ -136,6 +143,7 @@ struct Workspace {
     v_next: Vec<Vec3>,
     contacts: Vec<Contact>,
     impulses: Vec<Vec3>,
+    effective_mass: Vec<f64>,
     in_contact: Vec<bool>,
 }
 
@@ -237,6 +245,7 @@ impl Solver {
                 v_next: vec![Vec3::zeros(); n],
                 contacts: Vec::new(),
                 impulses: Vec::new(),
+                effective_mass: Vec::new(),
                 in_contact: vec![false; n],
             },
             times: StageTimes::default(),
@@ -528,6 +537,16 @@ impl Solver {
                 });
         }
         self.ws.v.copy_from_slice(&self.ws.v_star);
+        {
+            let system = &self.systems[&substeps];
+            let ws = &mut self.ws;
+            ws.effective_mass.clear();
+            for c in &ws.contacts {
+                let j = c.vertex as usize;
+                let m = self.masses[j] + COUPLING_SHARE * system.free_coupling(j, &ws.in_contact);
+                ws.effective_mass.push(m);
+            }
+        }
         self.times.local += started.elapsed();
 
         for iteration in 1..=self.params.max_iterations {
@@ -551,9 +570,8 @@ impl Solver {
                     .zip(&ws.v_next)
                     .map(|(a, b)| (a - b).amax())
                     .fold(0.0, f64::max);
-            for (c, r) in ws.contacts.iter().zip(&ws.impulses) {
-                let j = c.vertex as usize;
-                residual = residual.max(c.alart_curnier(*r, ws.v_next[j], self.masses[j]));
+            for ((c, r), m) in ws.contacts.iter().zip(&ws.impulses).zip(&ws.effective_mass) {
+                residual = residual.max(c.alart_curnier(*r, ws.v_next[c.vertex as usize], *m));
             }
             std::mem::swap(&mut self.ws.v, &mut self.ws.v_next);
             self.times.contact += started.elapsed();
@@ -615,8 +633,20 @@ impl Solver {
         self.times.local += started.elapsed();
     }
 
-    /// Per contact node: residual momentum f = rhs_j - ((P - M) v)_j, then each of its
-    /// contacts' impulse in turn (Gauss-Seidel over a node's obstacles), added to rhs_j.
+    /// Per contact node: residual momentum f = rhs_j - ((P - m) v)_j, then each of its
+    /// contacts' impulse in turn (Gauss-Seidel over a node's obstacles) for a node of
+    /// effective mass m, added to rhs_j.
+    ///
+    /// Ly et al. take m = m_j, the node's own mass. The fixed point does not depend on m,
+    /// only the speed of the iteration does: the impulse is m times the velocity correction,
+    /// while the global solve moves the node by (P^-1)_jj times the impulse. On light garment
+    /// meshes the springs make P_jj 10^2-10^4 times m_j, so with m = m_j an isolated contact
+    /// gets well under 1% of its correction per iteration (measured: residual ~1 m/s after 20
+    /// iterations, cloth falling through the body), while m = P_jj overshoots wherever
+    /// neighbouring nodes are in contact too and diverges. Neighbours in contact move with the
+    /// node (their coupling does not resist), free ones hold it back: we take
+    /// m = m_j + COUPLING_SHARE * sum over free neighbours k of |P_jk|, which is m_j inside a
+    /// contact patch and about a third of P_jj for an isolated contact.
     fn contact_step(&mut self, substeps: usize) {
         let started = Instant::now();
         let system = &self.systems[&substeps];
@@ -624,11 +654,13 @@ impl Solver {
         let mut k = 0;
         while k < ws.contacts.len() {
             let j = ws.contacts[k].vertex as usize;
-            let m = self.masses[j];
+            let m = ws.effective_mass[k];
             let mut f = ws.rhs[j] - system.row_times(j, &ws.v) + m * ws.v[j];
             let mut total = Vec3::zeros();
             while k < ws.contacts.len() && ws.contacts[k].vertex as usize == j {
-                let r = ws.contacts[k].impulse(f, m);
+                // Under-relaxed: half-way from the last impulse to the new one.
+                let r = ws.impulses[k]
+                    + IMPULSE_RELAXATION * (ws.contacts[k].impulse(f, m) - ws.impulses[k]);
                 ws.impulses[k] = r;
                 f += r;
                 total += r;

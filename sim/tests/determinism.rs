@@ -5,14 +5,21 @@ use sim::{ClothMesh, ClothSetup, ClothState, Material, Solver, SolverParams, Vec
 
 fn run() -> Vec<Vec3> {
     let mesh = ClothMesh::grid(20, 1.0, 0.6).unwrap();
-    let mut solver = Solver::new(ClothSetup::new(mesh.clone(), Material::default()), SolverParams::default(), 1.0 / 30.0).unwrap();
+    let mut solver = Solver::new(
+        ClothSetup::new(mesh.clone(), Material::default()),
+        SolverParams::default(),
+        1.0 / 30.0,
+    )
+    .unwrap();
     let mut obstacles: Vec<Box<dyn Obstacle>> = vec![
         Box::new(Sphere::new(Vec3::new(0.0, 0.3, 0.0), 0.25, 0.3)),
         Box::new(Plane::ground(0.0, 0.5)),
     ];
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     for frame in 0..20 {
-        solver.advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame).unwrap();
+        solver
+            .advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame)
+            .unwrap();
     }
     state.positions
 }
@@ -20,5 +27,9 @@ fn run() -> Vec<Vec3> {
 #[test]
 fn two_runs_are_bit_identical() {
     let (a, b) = (run(), run());
-    assert!(a.iter().zip(&b).all(|(p, q)| p.iter().zip(q.iter()).all(|(x, y)| x.to_bits() == y.to_bits())));
+    assert!(a.iter().zip(&b).all(|(p, q)| {
+        p.iter()
+            .zip(q.iter())
+            .all(|(x, y)| x.to_bits() == y.to_bits())
+    }));
 }

@@ -12,7 +12,12 @@ fn free_fall_matches_the_discrete_formula() {
         ..SolverParams::default()
     };
     let frame_dt = 1.0 / 30.0;
-    let mut solver = Solver::new(ClothSetup::new(mesh.clone(), Material::default()), params, frame_dt).unwrap();
+    let mut solver = Solver::new(
+        ClothSetup::new(mesh.clone(), Material::default()),
+        params,
+        frame_dt,
+    )
+    .unwrap();
     let v0 = Vec3::new(0.3, 1.5, -0.2);
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     state.velocities.iter_mut().for_each(|v| *v = v0);
@@ -26,10 +31,17 @@ fn free_fall_matches_the_discrete_formula() {
         let n = ((frame + 1) * 10) as f64;
         let v = v0 + n * h * g;
         let dx = n * h * v0 + g * h * h * n * (n + 1.0) / 2.0;
-        for (x, (x0, vel)) in state.positions.iter().zip(mesh.rest().iter().zip(&state.velocities)) {
+        for (x, (x0, vel)) in state
+            .positions
+            .iter()
+            .zip(mesh.rest().iter().zip(&state.velocities))
+        {
             worst = worst.max((x - (x0 + dx)).norm() / dx.norm());
             worst = worst.max((vel - v).norm() / v.norm());
         }
     }
-    assert!(worst < 1e-10, "relative deviation from the exact discrete free fall: {worst:e} (tolerance 1e-10)");
+    assert!(
+        worst < 1e-10,
+        "relative deviation from the exact discrete free fall: {worst:e} (tolerance 1e-10)"
+    );
 }

@@ -10,13 +10,22 @@ const G: f64 = 9.81;
 /// A small stiff patch lying on a plane through the origin tilted by `theta` about z (the
 /// downhill direction is -x rotated). Returns the solver, state, obstacle and downhill unit
 /// vector.
-fn patch_on_incline(theta: f64, mu: f64, lift: f64, substeps: usize) -> (Solver, ClothState, Vec<Box<dyn Obstacle>>, Vec3, Vec3) {
+fn patch_on_incline(
+    theta: f64,
+    mu: f64,
+    lift: f64,
+    substeps: usize,
+) -> (Solver, ClothState, Vec<Box<dyn Obstacle>>, Vec3, Vec3) {
     let mesh = ClothMesh::grid(3, 0.02, 0.0).unwrap();
     let normal = Vec3::new(theta.sin(), theta.cos(), 0.0);
     let downhill = Vec3::new(theta.cos(), -theta.sin(), 0.0);
     let side = Vec3::z();
     // Map the grid's x-z plane onto the incline, lifted along the normal.
-    let positions: Vec<Vec3> = mesh.rest().iter().map(|p| downhill * p.x + side * p.z + normal * lift).collect();
+    let positions: Vec<Vec3> = mesh
+        .rest()
+        .iter()
+        .map(|p| downhill * p.x + side * p.z + normal * lift)
+        .collect();
     let mesh = ClothMesh::new(positions.clone(), mesh.triangles().to_vec()).unwrap();
     let params = SolverParams {
         substeps,
@@ -25,10 +34,20 @@ fn patch_on_incline(theta: f64, mu: f64, lift: f64, substeps: usize) -> (Solver,
         contact_offset: 0.0,
         ..SolverParams::default()
     };
-    let material = Material { stretch: 1000.0, density: 0.2, bending: 1e-6 };
+    let material = Material {
+        stretch: 1000.0,
+        density: 0.2,
+        bending: 1e-6,
+    };
     let solver = Solver::new(ClothSetup::new(mesh, material), params, 1.0 / 30.0).unwrap();
     let plane: Box<dyn Obstacle> = Box::new(Plane::new(Vec3::zeros(), normal, mu));
-    (solver, ClothState::at_rest(positions), vec![plane], downhill, normal)
+    (
+        solver,
+        ClothState::at_rest(positions),
+        vec![plane],
+        downhill,
+        normal,
+    )
 }
 
 fn centroid(s: &ClothState) -> Vec3 {
@@ -38,13 +57,19 @@ fn centroid(s: &ClothState) -> Vec3 {
 #[test]
 fn sticks_when_mu_exceeds_the_slope() {
     let theta = 30f64.to_radians();
-    let (mut solver, mut state, mut obstacles, _, _) = patch_on_incline(theta, theta.tan() + 0.05, 0.0, 4);
+    let (mut solver, mut state, mut obstacles, _, _) =
+        patch_on_incline(theta, theta.tan() + 0.05, 0.0, 4);
     let start = centroid(&state);
     for frame in 0..30 {
-        solver.advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame).unwrap();
+        solver
+            .advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame)
+            .unwrap();
     }
     let drift = (centroid(&state) - start).norm();
-    assert!(drift < 1e-6, "drift over 1 s at mu = tan(theta) + 0.05: {drift:e} m (tolerance 1e-6 m)");
+    assert!(
+        drift < 1e-6,
+        "drift over 1 s at mu = tan(theta) + 0.05: {drift:e} m (tolerance 1e-6 m)"
+    );
 }
 
 #[test]
@@ -55,13 +80,18 @@ fn slides_with_the_coulomb_acceleration() {
     let expected = G * (theta.sin() - mu * theta.cos());
     let mut speeds = Vec::new();
     for frame in 0..30 {
-        solver.advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame).unwrap();
+        solver
+            .advance_frame(&mut state, &mut obstacles, frame as f64 / 30.0, frame)
+            .unwrap();
         let v: Vec3 = state.velocities.iter().sum::<Vec3>() / state.velocities.len() as f64;
         speeds.push(v.dot(&downhill));
     }
     let measured = (speeds[29] - speeds[9]) / (20.0 / 30.0);
     let error = (measured / expected - 1.0).abs();
-    assert!(error < 0.01, "acceleration {measured:.5} m/s^2, expected g(sin - mu cos) = {expected:.5} (tolerance 1%)");
+    assert!(
+        error < 0.01,
+        "acceleration {measured:.5} m/s^2, expected g(sin - mu cos) = {expected:.5} (tolerance 1%)"
+    );
 }
 
 #[test]
@@ -81,7 +111,9 @@ fn drop_onto_a_45_degree_plane_matches_ly_2020() {
     let mut t = 0.0;
     for frame in 0..15 {
         // Sample every step through one-step frames: advance the frame, then look.
-        solver.advance_frame(&mut state, &mut obstacles, t, frame).unwrap();
+        solver
+            .advance_frame(&mut state, &mut obstacles, t, frame)
+            .unwrap();
         t += frame_dt;
         let v: Vec3 = state.velocities.iter().sum::<Vec3>() / state.velocities.len() as f64;
         samples.push((t, v));
@@ -91,11 +123,20 @@ fn drop_onto_a_45_degree_plane_matches_ly_2020() {
     }
     let impact = impact.expect("the patch lands");
     // With 30 fps sampling, the first frame after impact ends within 33 ms after 0.2019 s.
-    assert!(impact > 0.2019 && impact < 0.2019 + frame_dt + 1e-9, "impact seen at {impact} s, expected just after 0.2019 s");
+    assert!(
+        impact > 0.2019 && impact < 0.2019 + frame_dt + 1e-9,
+        "impact seen at {impact} s, expected just after 0.2019 s"
+    );
     let (t_end, v_end) = samples[14];
     let expected = 1.2606 + 6.243 * (t_end - 0.2019);
     let measured = v_end.dot(&downhill);
-    assert!((measured - expected).abs() / expected < 0.01, "tangential speed {measured:.4} m/s at {t_end:.3} s, expected {expected:.4}");
+    assert!(
+        (measured - expected).abs() / expected < 0.01,
+        "tangential speed {measured:.4} m/s at {t_end:.3} s, expected {expected:.4}"
+    );
     let accel = (samples[14].1 - samples[9].1).dot(&downhill) / (5.0 * frame_dt);
-    assert!((accel / 6.243 - 1.0).abs() < 0.01, "acceleration after impact {accel:.4} m/s^2, expected 6.243");
+    assert!(
+        (accel / 6.243 - 1.0).abs() < 0.01,
+        "acceleration after impact {accel:.4} m/s^2, expected 6.243"
+    );
 }

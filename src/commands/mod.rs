@@ -2,7 +2,9 @@
 
 mod body;
 mod demo;
+mod drape_bench;
 mod motions_cmd;
+mod simulate;
 
 use anyhow::Result;
 
@@ -12,6 +14,8 @@ use crate::cli::{Cli, Command};
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo(args) => demo::run(&args),
+        Command::Simulate(args) => simulate::run(&args),
+        Command::DrapeBench(args) => drape_bench::run(&args),
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
     }
