@@ -54,7 +54,12 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
     if !BUILTIN.contains(&name) {
         return Err(Error::Unknown(name.to_string()));
     }
-    if body.is_empty() || params.columns < 8 || params.rings < 2 || params.length.is_nan() || params.length <= 0.0 {
+    if body.is_empty()
+        || params.columns < 8
+        || params.rings < 2
+        || params.length.is_nan()
+        || params.length <= 0.0
+    {
         return Err(Error::Invalid(
             "skirt needs a body and at least 8 columns and 2 rings".into(),
         ));
