@@ -365,3 +365,26 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
         "only the three inputs remain: no outputs, no temporary files"
     );
 }
+
+/// The recording opens in the public Python `mcap` package (tools/read_recording.py). Skipped
+/// with a message where python3 with `mcap` and `numpy` is not installed (.ci/run installs
+/// them).
+#[test]
+fn recording_reads_in_python() {
+    let probe = std::process::Command::new("python3")
+        .args(["-c", "import mcap, numpy"])
+        .status();
+    if !probe.is_ok_and(|s| s.success()) {
+        eprintln!("skipped: python3 with mcap and numpy not available");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let seq = dir.path().join("seq.mcap");
+    ok(&["simulate", "--frames", "4", "--out", seq.to_str().unwrap(), "--quiet"]);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/read_recording.py");
+    let out = std::process::Command::new("python3").arg(script).arg(&seq).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["frames"], 4);
+    assert_eq!(j["pose_dim"], 72);
+}
