@@ -103,12 +103,19 @@ pub fn material(text: &str) -> Result<sim::Material> {
     Ok(m)
 }
 
-/// A garment template: an OBJ file with UVs, or a built-in garment fitted to `model` in its
-/// canonical pose and draped there (1.5 s of settling).
-pub fn garment(source: &str, model: &BodyModel) -> Result<garments::Garment> {
+/// Stiffness of each waistband attachment of the built-in skirt, N/m.
+const WAISTBAND_STIFFNESS: f64 = 20.0;
+
+/// A garment template and its body attachments: an OBJ file with UVs (no attachments), or a
+/// built-in garment fitted to `model` in its canonical pose, its waistband (top ring) attached
+/// to the body like an elastic band, and draped there (1.5 s of settling).
+pub fn garment(
+    source: &str,
+    model: &BodyModel,
+) -> Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
     let path = Path::new(source);
     if source.ends_with(".obj") || path.exists() {
-        return Ok(garments::read_obj(path)?);
+        return Ok((garments::read_obj(path)?, Vec::new()));
     }
     let shaped = model.shape(&[])?;
     let canonical = motions::FramePose {
@@ -116,7 +123,11 @@ pub fn garment(source: &str, model: &BodyModel) -> Result<garments::Garment> {
         transl: [0.0; 3],
     };
     let body = model.pose(&shaped, &canonical)?;
-    let raw = garments::skirt(source, &body.vertices, &garments::SkirtParams::default())?;
+    let params = garments::SkirtParams::default();
+    let raw = garments::skirt(source, &body.vertices, &params)?;
+    let waist: Vec<u32> = (0..params.columns as u32).collect();
+    let attachments =
+        sim::scene::attach_to_body(model, &raw.positions, &waist, WAISTBAND_STIFFNESS)?;
     let (draped, _) = sim::scene::drape_on_canonical_body(
         model,
         &raw.positions,
@@ -124,10 +135,16 @@ pub fn garment(source: &str, model: &BodyModel) -> Result<garments::Garment> {
         sim::Material::default(),
         0.5,
         45,
+        &attachments,
     )
     .with_context(|| format!("draping built-in garment '{source}'"))?;
-    Ok(garments::Garment {
-        positions: draped,
-        ..raw
-    })
+    // Heights above the body are those of the draped template.
+    let attachments = sim::scene::attach_to_body(model, &draped, &waist, WAISTBAND_STIFFNESS)?;
+    Ok((
+        garments::Garment {
+            positions: draped,
+            ..raw
+        },
+        attachments,
+    ))
 }

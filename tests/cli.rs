@@ -380,10 +380,25 @@ fn recording_reads_in_python() {
     }
     let dir = tempfile::tempdir().unwrap();
     let seq = dir.path().join("seq.mcap");
-    ok(&["simulate", "--frames", "4", "--out", seq.to_str().unwrap(), "--quiet"]);
+    ok(&[
+        "simulate",
+        "--frames",
+        "4",
+        "--out",
+        seq.to_str().unwrap(),
+        "--quiet",
+    ]);
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/read_recording.py");
-    let out = std::process::Command::new("python3").arg(script).arg(&seq).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new("python3")
+        .arg(script)
+        .arg(&seq)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let j: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(j["frames"], 4);
     assert_eq!(j["pose_dim"], 72);

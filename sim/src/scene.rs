@@ -42,6 +42,158 @@ pub struct Scene {
     pub params: SolverParams,
     /// Output frames to simulate (blend-in and settle included); `None` = the whole motion.
     pub frames: Option<usize>,
+    /// Cloth vertices held to body surface points (an elastic waistband), see
+    /// [`attach_to_body`].
+    pub attachments: Vec<BodyAttachment>,
+}
+
+/// A cloth vertex held by a spring to a point on the body surface: a body triangle, the
+/// barycentric position on it, and the height above it along its normal. The point follows
+/// the body as it moves and changes shape.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BodyAttachment {
+    /// Cloth vertex.
+    pub vertex: u32,
+    /// Body triangle.
+    pub triangle: u32,
+    /// Barycentric coordinates on the triangle.
+    pub barycentric: [f64; 3],
+    /// Height above the triangle along its normal, m.
+    pub height: f64,
+    /// Spring stiffness, N/m.
+    pub stiffness: f64,
+}
+
+impl BodyAttachment {
+    /// Where the attached point is on a posed body.
+    pub fn target(&self, vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec3 {
+        let [a, b, c] = faces[self.triangle as usize].map(|v| {
+            let p = vertices[v as usize];
+            Vec3::new(p[0], p[1], p[2])
+        });
+        let normal = (b - a)
+            .cross(&(c - a))
+            .try_normalize(1e-20)
+            .unwrap_or_else(Vec3::y);
+        a * self.barycentric[0]
+            + b * self.barycentric[1]
+            + c * self.barycentric[2]
+            + normal * self.height
+    }
+}
+
+/// Attaches the given cloth vertices (template positions on the canonical body) to their
+/// closest body surface points, with `stiffness` N/m each.
+pub fn attach_to_body(
+    model: &BodyModel,
+    template: &[[f64; 3]],
+    vertices: &[u32],
+    stiffness: f64,
+) -> Result<Vec<BodyAttachment>> {
+    let shaped = model.shape(&[])?;
+    let body = model.pose(
+        &shaped,
+        &FramePose {
+            pose: canonical_a_pose(),
+            transl: [0.0; 3],
+        },
+    )?;
+    let faces = model.faces();
+    let mut out = Vec::with_capacity(vertices.len());
+    for &v in vertices {
+        let p = template
+            .get(v as usize)
+            .ok_or_else(|| Error::Setting(format!("attachment vertex {v} does not exist")))?;
+        let p = Vec3::new(p[0], p[1], p[2]);
+        let mut best = (f64::INFINITY, 0u32, [0.0; 3]);
+        for (t, f) in faces.iter().enumerate() {
+            let [a, b, c] = f.map(|i| {
+                let q = body.vertices[i as usize];
+                Vec3::new(q[0], q[1], q[2])
+            });
+            let (q, bary) = closest_on_triangle(p, a, b, c);
+            let d = (p - q).norm_squared();
+            if d < best.0 {
+                best = (d, t as u32, bary);
+            }
+        }
+        let mut attachment = BodyAttachment {
+            vertex: v,
+            triangle: best.1,
+            barycentric: best.2,
+            height: 0.0,
+            stiffness,
+        };
+        let on_surface = attachment.target(&body.vertices, faces);
+        let [a, b, c] = faces[best.1 as usize].map(|i| {
+            let q = body.vertices[i as usize];
+            Vec3::new(q[0], q[1], q[2])
+        });
+        let normal = (b - a)
+            .cross(&(c - a))
+            .try_normalize(1e-20)
+            .unwrap_or_else(Vec3::y);
+        attachment.height = (p - on_surface).dot(&normal);
+        out.push(attachment);
+    }
+    Ok(out)
+}
+
+/// Closest point on triangle (a, b, c) to p, with barycentric coordinates (Ericson, RTCD 5.1.5).
+fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (Vec3, [f64; 3]) {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, [1.0, 0.0, 0.0]);
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, [0.0, 1.0, 0.0]);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (a + ab * v, [1.0 - v, v, 0.0]);
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, [0.0, 0.0, 1.0]);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (a + ac * w, [1.0 - w, 0.0, w]);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + (c - b) * w, [0.0, 1.0 - w, w]);
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (a + ab * v + ac * w, [1.0 - v - w, v, w])
+}
+
+fn cloth_setup(mesh: ClothMesh, material: Material, attachments: &[BodyAttachment]) -> ClothSetup {
+    let mut setup = ClothSetup::new(mesh, material);
+    setup.attachments = attachments
+        .iter()
+        .map(|a| crate::constraints::Attachment {
+            vertex: a.vertex,
+            stiffness: a.stiffness,
+        })
+        .collect();
+    setup
+}
+
+fn attachment_targets(
+    attachments: &[BodyAttachment],
+    body: &[[f64; 3]],
+    faces: &[[u32; 3]],
+) -> Vec<Vec3> {
+    attachments.iter().map(|a| a.target(body, faces)).collect()
 }
 
 /// Statistics of one output frame.
@@ -251,13 +403,18 @@ impl Scene {
             .collect();
         let mesh = ClothMesh::new(to_vec3(&self.template), self.triangles.clone())?;
         let mut solver = Solver::new(
-            ClothSetup::new(mesh.clone(), self.material),
+            cloth_setup(mesh.clone(), self.material, &self.attachments),
             self.params,
             1.0 / FPS,
         )?;
         let mut state = ClothState::at_rest(start);
 
         let (mut betas, mut body) = pose_frame(0)?;
+        solver.set_attachment_targets(&attachment_targets(
+            &self.attachments,
+            &body.vertices,
+            model.faces(),
+        ));
         let body_vertices = to_vec3(&body.vertices);
         let floor = body_vertices.iter().fold(f64::INFINITY, |a, p| a.min(p.y));
         let mut animated = AnimatedMesh::new(&body_vertices, model.faces(), self.friction)?;
@@ -298,6 +455,11 @@ impl Scene {
             let next = to_vec3(&body.vertices);
             let t0 = (k - 1) as f64 / FPS;
             body_obstacle(&mut obstacles).set_keyframes(&previous, &next, t0, t0 + 1.0 / FPS)?;
+            solver.set_attachment_targets(&attachment_targets(
+                &self.attachments,
+                &body.vertices,
+                model.faces(),
+            ));
             let report = solver.advance_frame(&mut state, &mut obstacles, t0, k)?;
             steps += report.steps;
             iterations += report.iterations;
@@ -384,6 +546,7 @@ pub fn drape_on_canonical_body(
     material: Material,
     friction: f64,
     frames: usize,
+    attachments: &[BodyAttachment],
 ) -> Result<(Vec<[f64; 3]>, f64)> {
     let shaped = model.shape(&[])?;
     let body = model.pose(
@@ -400,7 +563,16 @@ pub fn drape_on_canonical_body(
         air_damping: 2.0,
         ..SolverParams::default()
     };
-    let mut solver = Solver::new(ClothSetup::new(mesh.clone(), material), params, 1.0 / FPS)?;
+    let mut solver = Solver::new(
+        cloth_setup(mesh.clone(), material, attachments),
+        params,
+        1.0 / FPS,
+    )?;
+    solver.set_attachment_targets(&attachment_targets(
+        attachments,
+        &body.vertices,
+        model.faces(),
+    ));
     let vertices = to_vec3(&body.vertices);
     let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(AnimatedMesh::new(
         &vertices,

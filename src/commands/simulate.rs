@@ -28,7 +28,7 @@ pub fn prepare(args: &SceneArgs) -> Result<Prepared> {
     let material = inputs::material(&args.material)?;
     let shaped = model.shape(&args.betas)?;
     let motion = inputs::motion(&args.motion, &model, &shaped)?;
-    let garment = inputs::garment(&args.garment, &model)?;
+    let (garment, attachments) = inputs::garment(&args.garment, &model)?;
     let params = SolverParams {
         substeps: args.substeps,
         max_iterations: args.iterations,
@@ -47,6 +47,7 @@ pub fn prepare(args: &SceneArgs) -> Result<Prepared> {
         friction: args.friction,
         params,
         frames: args.frames,
+        attachments,
     };
     scene.validate(&model)?;
     Ok(Prepared {

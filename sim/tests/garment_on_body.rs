@@ -1,0 +1,110 @@
+//! A garment rides a walking and a jumping body without falling through or falling off: the
+//! built-in skirt (waistband attached) on the default body, penetration at most 1 cm.
+
+use motions::library::MotionSpec;
+use motions::{BlendIn, BodyModel, FramePose, canonical_a_pose};
+use sim::scene::{Scene, attach_to_body, drape_on_canonical_body};
+use sim::{Material, SolverParams};
+
+fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
+    let model = BodyModel::default_body();
+    let rest = model.shape(&[]).unwrap();
+    let canonical = model
+        .pose(
+            &rest,
+            &FramePose {
+                pose: canonical_a_pose(),
+                transl: [0.0; 3],
+            },
+        )
+        .unwrap();
+    let params = garments::SkirtParams::default();
+    let raw = garments::skirt("default", &canonical.vertices, &params).unwrap();
+    let waist: Vec<u32> = (0..params.columns as u32).collect();
+    let attachments = attach_to_body(&model, &raw.positions, &waist, 20.0).unwrap();
+    let (template, _) = drape_on_canonical_body(
+        &model,
+        &raw.positions,
+        &raw.triangles,
+        Material::default(),
+        0.5,
+        20,
+        &attachments,
+    )
+    .unwrap();
+    let attachments = attach_to_body(&model, &template, &waist, 20.0).unwrap();
+    let shaped = model.shape(betas).unwrap();
+    let motion = MotionSpec::parse(motion)
+        .unwrap()
+        .generate(&model, &shaped)
+        .unwrap();
+    let scene = Scene {
+        template,
+        triangles: raw.triangles.clone(),
+        betas: betas.to_vec(),
+        motion,
+        blend: BlendIn {
+            blend_frames: 15,
+            settle_frames: 5,
+        },
+        material: Material::default(),
+        friction: 0.3,
+        params: SolverParams {
+            substeps: 2,
+            max_iterations: 10,
+            ..SolverParams::default()
+        },
+        frames: None,
+        attachments,
+    };
+    let mut lowest_top: f64 = f64::INFINITY;
+    let mut waist_drop: f64 = 0.0;
+    let summary = scene
+        .run(&model, |frame| {
+            let top = frame.garment[..params.columns]
+                .iter()
+                .map(|p| p.y)
+                .fold(f64::INFINITY, f64::min);
+            lowest_top = lowest_top.min(top - frame.pose.transl[1]);
+            let pelvis = frame.body.joints[0][1];
+            waist_drop = waist_drop.max(pelvis - top);
+            Ok(())
+        })
+        .unwrap();
+    assert!(summary.finite);
+    (
+        summary.max_penetration_m,
+        waist_drop,
+        summary.max_edge_stretch,
+    )
+}
+
+#[test]
+fn skirt_rides_a_walk() {
+    let (depth, drop, stretch) = ride("walk:duration=1.5", &[]);
+    assert!(
+        depth <= 0.01,
+        "max penetration {:.1} mm (limit 10 mm)",
+        depth * 1e3
+    );
+    assert!(
+        drop < 0.15,
+        "waistband {drop:.3} m below the pelvis joint: the skirt slid off"
+    );
+    assert!(stretch < 1.3, "max edge stretch {stretch:.3}");
+}
+
+#[test]
+fn skirt_rides_jumping_jacks_on_a_larger_body() {
+    let (depth, drop, stretch) = ride("jumping_jacks:duration=1.5", &[1.5, 1.0]);
+    assert!(
+        depth <= 0.01,
+        "max penetration {:.1} mm (limit 10 mm)",
+        depth * 1e3
+    );
+    assert!(
+        drop < 0.15,
+        "waistband {drop:.3} m below the pelvis joint: the skirt slid off"
+    );
+    assert!(stretch < 1.3, "max edge stretch {stretch:.3}");
+}
