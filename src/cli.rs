@@ -85,7 +85,7 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 2)]
     pub substeps: usize,
     /// Maximum solver iterations per substep.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 8)]
     pub iterations: usize,
 }
 

@@ -25,8 +25,9 @@ use crate::params::{Material, SolverParams};
 use crate::system::{GlobalSystem, Symbolic};
 
 /// Bending is lagged (left out of the factorized matrix) when it adds less than this share to
-/// the matrix diagonal; see `system.rs`.
-const LAGGED_BENDING_SHARE: f64 = 0.02;
+/// the matrix diagonal; see `system.rs`. The default material on the built-in skirt has 7.8%
+/// (lagging it halves the solve time); k_b = 1e-4 has 78% and stays in the matrix.
+const LAGGED_BENDING_SHARE: f64 = 0.1;
 
 /// Share of the coupling to free neighbours counted in a contact node's effective mass (see
 /// `contact_step`).
@@ -279,7 +280,8 @@ impl Solver {
         if !self.systems.contains_key(&substeps) {
             let started = Instant::now();
             let h = self.frame_dt / substeps as f64;
-            let lag = self.constraints.bending_share(&self.masses, h) < LAGGED_BENDING_SHARE;
+            let share = self.constraints.bending_share(&self.masses, h);
+            let lag = share < LAGGED_BENDING_SHARE;
             let system = GlobalSystem::new(
                 &self.masses,
                 &self.constraints,
