@@ -36,8 +36,7 @@ fn scene(model: &BodyModel) -> Scene {
 
 fn error_of(s: &Scene, model: &BodyModel) -> String {
     s.run(model, |_| Ok(()))
-        .err()
-        .expect("the scene is rejected")
+        .expect_err("the scene is rejected")
         .to_string()
 }
 
