@@ -13,6 +13,7 @@ pub mod constraints;
 mod contact;
 pub mod drape_bench;
 mod error;
+pub mod metrics;
 pub mod obstacles;
 mod params;
 pub mod recording;
