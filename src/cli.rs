@@ -25,6 +25,9 @@ pub enum Command {
     /// The standard drape scene of the peer benchmarks (1 m cloth onto a sphere), timed and
     /// measured like ../shared/peers.
     DrapeBench(DrapeBenchArgs),
+    /// Score recording B against recording A (ground truth, same template) with the paper's
+    /// metrics, every 5th frame.
+    Compare(CompareArgs),
     /// Pose a body (default body or an SMPL .npz model) and write it as OBJ in the model's
     /// vertex order.
     Body(BodyArgs),
@@ -133,6 +136,28 @@ pub struct DrapeBenchArgs {
     /// `max_edge_stretch`, `p99_edge_stretch`, `drape_proxy`, `lowest_z_m`, `finite`) here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Ground-truth recording.
+    pub a: PathBuf,
+    /// Recording to score (same garment template).
+    pub b: PathBuf,
+    /// Body model the recordings were made with (default body if omitted); used to rebuild the
+    /// body for E_c when the recordings do not carry body vertices.
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Print every scored frame.
+    #[arg(long)]
+    pub per_frame: bool,
+    /// Write `E_v`, `E_CD`, `E_CD_cm`, `E_n`, `E_c`, `E_c_vertex`, `E_b`, `E_s`, `E_d`,
+    /// `frames_scored` (and units, per-frame scores) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Seed of the surface samples.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
 }
 
 /// Where the body comes from and its shape.

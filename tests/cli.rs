@@ -403,3 +403,79 @@ fn recording_reads_in_python() {
     assert_eq!(j["frames"], 4);
     assert_eq!(j["pose_dim"], 72);
 }
+
+#[test]
+fn compare_scores_a_recording_against_itself_and_another() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.mcap"), dir.path().join("b.mcap"));
+    ok(&[
+        "simulate",
+        "--frames",
+        "6",
+        "--blend-frames",
+        "3",
+        "--settle-frames",
+        "1",
+        "--out",
+        a.to_str().unwrap(),
+        "--quiet",
+    ]);
+    ok(&[
+        "simulate",
+        "--frames",
+        "6",
+        "--blend-frames",
+        "3",
+        "--settle-frames",
+        "1",
+        "--material",
+        "k_s=50",
+        "--out",
+        b.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let same = dir.path().join("same.json");
+    ok(&[
+        "compare",
+        a.to_str().unwrap(),
+        a.to_str().unwrap(),
+        "--json",
+        same.to_str().unwrap(),
+    ]);
+    let j = json(&same);
+    for key in [
+        "E_v",
+        "E_CD",
+        "E_CD_cm",
+        "E_n",
+        "E_c",
+        "E_c_vertex",
+        "E_b",
+        "E_s",
+        "E_d",
+        "frames_scored",
+    ] {
+        assert!(j.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(j["frames_scored"], 2);
+    for key in ["E_v", "E_CD", "E_n", "E_b", "E_s", "E_d"] {
+        assert_eq!(j[key], 0.0, "{key} of a recording against itself");
+    }
+    let other = dir.path().join("other.json");
+    ok(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--json",
+        other.to_str().unwrap(),
+    ]);
+    assert!(json(&other)["E_v"].as_f64().unwrap() > 0.0);
+    let truncated = dir.path().join("cut.mcap");
+    let bytes = std::fs::read(&a).unwrap();
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    let err = fails(&["compare", a.to_str().unwrap(), truncated.to_str().unwrap()]);
+    assert!(
+        err.contains("cut.mcap") && err.contains("truncated"),
+        "{err}"
+    );
+}

@@ -1,6 +1,7 @@
 //! One module per subcommand; each turns parsed flags into a run.
 
 mod body;
+mod compare;
 mod demo;
 mod drape_bench;
 mod motions_cmd;
@@ -16,6 +17,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => demo::run(&args),
         Command::Simulate(args) => simulate::run(&args),
         Command::DrapeBench(args) => drape_bench::run(&args),
+        Command::Compare(args) => compare::run(&args),
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
     }
