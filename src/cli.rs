@@ -25,6 +25,9 @@ pub enum Command {
     /// The standard drape scene of the peer benchmarks (1 m cloth onto a sphere), timed and
     /// measured like ../shared/peers.
     DrapeBench(DrapeBenchArgs),
+    /// Run the physics regression suite: one row per scenario (expected, measured,
+    /// tolerance, pass).
+    Regress(RegressArgs),
     /// Score recording B against recording A (ground truth, same template) with the paper's
     /// metrics, every 5th frame.
     Compare(CompareArgs),
@@ -134,6 +137,19 @@ pub struct DrapeBenchArgs {
     pub out: PathBuf,
     /// Also write the result (the peers' keys: `n`, `t_sim_2s_wall_s`, `verts_inside_sphere`,
     /// `max_edge_stretch`, `p99_edge_stretch`, `drape_proxy`, `lowest_z_m`, `finite`) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct RegressArgs {
+    /// Higher resolutions and longer runs.
+    #[arg(long)]
+    pub long: bool,
+    /// Only scenarios whose name contains this.
+    #[arg(long, default_value = "")]
+    pub only: String,
+    /// Write `{"scenarios": [{"name", "expected", "measured", "tolerance", "pass", "unit"}]}`.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }

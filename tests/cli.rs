@@ -480,3 +480,18 @@ fn compare_scores_a_recording_against_itself_and_another() {
         "{err}"
     );
 }
+
+#[test]
+fn regress_writes_the_checked_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("regress.json");
+    ok(&["regress", "--json", out.to_str().unwrap()]);
+    let j = json(&out);
+    let scenarios = j["scenarios"].as_array().unwrap();
+    assert!(scenarios.len() >= 12, "{} scenarios", scenarios.len());
+    for s in scenarios {
+        for key in ["name", "expected", "measured", "tolerance", "pass"] {
+            assert!(s.get(key).is_some(), "missing {key} in {s}");
+        }
+    }
+}

@@ -124,6 +124,39 @@ impl ClothMesh {
         boundary
     }
 
+    /// A near-equilateral sheet in the x-y plane (z = 0): `columns` vertices per row spaced
+    /// `spacing` apart along x, `rows` rows spaced spacing sqrt(3)/2 apart going down (-y) from
+    /// y = 0, odd rows shifted by half a spacing. Vertex index row * columns + column.
+    pub fn equilateral(columns: usize, rows: usize, spacing: f64) -> Result<Self> {
+        if columns < 2 || rows < 2 {
+            return Err(Error::Mesh(format!(
+                "sheet needs at least 2 x 2 vertices, got {columns} x {rows}"
+            )));
+        }
+        let dy = spacing * 3f64.sqrt() / 2.0;
+        let mut rest = Vec::with_capacity(columns * rows);
+        for r in 0..rows {
+            let shift = if r % 2 == 1 { 0.5 * spacing } else { 0.0 };
+            for c in 0..columns {
+                rest.push(Vec3::new(c as f64 * spacing + shift, -(r as f64) * dy, 0.0));
+            }
+        }
+        let id = |r: usize, c: usize| (r * columns + c) as u32;
+        let mut triangles = Vec::new();
+        for r in 0..rows - 1 {
+            for c in 0..columns - 1 {
+                if r % 2 == 0 {
+                    triangles.push([id(r, c), id(r + 1, c), id(r, c + 1)]);
+                    triangles.push([id(r, c + 1), id(r + 1, c), id(r + 1, c + 1)]);
+                } else {
+                    triangles.push([id(r, c), id(r + 1, c + 1), id(r, c + 1)]);
+                    triangles.push([id(r, c), id(r + 1, c), id(r + 1, c + 1)]);
+                }
+            }
+        }
+        Self::new(rest, triangles)
+    }
+
     /// A regular n x n grid of `size` x `size` metres in the x-z plane at height `y`, vertex
     /// index i * n + j for x index i and z index j, each quad split along the same diagonal
     /// (the peer simulators' drape-scene layout).

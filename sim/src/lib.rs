@@ -17,6 +17,7 @@ pub mod metrics;
 pub mod obstacles;
 mod params;
 pub mod recording;
+pub mod regress;
 pub mod scene;
 mod solver;
 mod system;

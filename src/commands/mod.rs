@@ -5,6 +5,7 @@ mod compare;
 mod demo;
 mod drape_bench;
 mod motions_cmd;
+mod regress;
 mod simulate;
 
 use anyhow::Result;
@@ -18,6 +19,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Simulate(args) => simulate::run(&args),
         Command::DrapeBench(args) => drape_bench::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Regress(args) => regress::run(&args),
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
     }
