@@ -149,6 +149,13 @@ pub struct RegressArgs {
     /// Only scenarios whose name contains this.
     #[arg(long, default_value = "")]
     pub only: String,
+    /// Regenerate the golden sequences (sim/goldens/) instead of checking them; needs
+    /// --reason, which is recorded in sim/goldens/BLESSED.md.
+    #[arg(long, requires = "reason")]
+    pub bless: bool,
+    /// Why the goldens are regenerated.
+    #[arg(long)]
+    pub reason: Option<String>,
     /// Write `{"scenarios": [{"name", "expected", "measured", "tolerance", "pass", "unit"}]}`.
     #[arg(long)]
     pub json: Option<PathBuf>,

@@ -103,12 +103,8 @@ pub fn material(text: &str) -> Result<sim::Material> {
     Ok(m)
 }
 
-/// Stiffness of each waistband attachment of the built-in skirt, N/m.
-const WAISTBAND_STIFFNESS: f64 = 20.0;
-
 /// A garment template and its body attachments: an OBJ file with UVs (no attachments), or a
-/// built-in garment fitted to `model` in its canonical pose, its waistband (top ring) attached
-/// to the body like an elastic band, and draped there (1.5 s of settling).
+/// built-in garment fitted to `model` and draped ([`sim::scene::builtin_template`]).
 pub fn garment(
     source: &str,
     model: &BodyModel,
@@ -117,34 +113,6 @@ pub fn garment(
     if source.ends_with(".obj") || path.exists() {
         return Ok((garments::read_obj(path)?, Vec::new()));
     }
-    let shaped = model.shape(&[])?;
-    let canonical = motions::FramePose {
-        pose: motions::canonical_a_pose(),
-        transl: [0.0; 3],
-    };
-    let body = model.pose(&shaped, &canonical)?;
-    let params = garments::SkirtParams::default();
-    let raw = garments::skirt(source, &body.vertices, &params)?;
-    let waist: Vec<u32> = (0..params.columns as u32).collect();
-    let attachments =
-        sim::scene::attach_to_body(model, &raw.positions, &waist, WAISTBAND_STIFFNESS)?;
-    let (draped, _) = sim::scene::drape_on_canonical_body(
-        model,
-        &raw.positions,
-        &raw.triangles,
-        sim::Material::default(),
-        0.5,
-        45,
-        &attachments,
-    )
-    .with_context(|| format!("draping built-in garment '{source}'"))?;
-    // Heights above the body are those of the draped template.
-    let attachments = sim::scene::attach_to_body(model, &draped, &waist, WAISTBAND_STIFFNESS)?;
-    Ok((
-        garments::Garment {
-            positions: draped,
-            ..raw
-        },
-        attachments,
-    ))
+    sim::scene::builtin_template(model, source, &garments::SkirtParams::default())
+        .with_context(|| format!("preparing built-in garment '{source}'"))
 }

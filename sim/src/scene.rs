@@ -590,3 +590,45 @@ pub fn drape_on_canonical_body(
         moving,
     ))
 }
+
+/// Stiffness of each waistband attachment of the built-in skirt, N/m.
+pub const WAISTBAND_STIFFNESS: f64 = 20.0;
+
+/// A built-in garment as a template: fitted to `model` in its canonical pose, its waistband
+/// (top ring) attached to the body like an elastic band, and draped there for 1.5 s.
+pub fn builtin_template(
+    model: &BodyModel,
+    name: &str,
+    params: &garments::SkirtParams,
+) -> Result<(garments::Garment, Vec<BodyAttachment>)> {
+    let shaped = model.shape(&[])?;
+    let body = model.pose(
+        &shaped,
+        &FramePose {
+            pose: canonical_a_pose(),
+            transl: [0.0; 3],
+        },
+    )?;
+    let raw =
+        garments::skirt(name, &body.vertices, params).map_err(|e| Error::Setting(e.to_string()))?;
+    let waist: Vec<u32> = (0..params.columns as u32).collect();
+    let attachments = attach_to_body(model, &raw.positions, &waist, WAISTBAND_STIFFNESS)?;
+    let (draped, _) = drape_on_canonical_body(
+        model,
+        &raw.positions,
+        &raw.triangles,
+        Material::default(),
+        0.5,
+        45,
+        &attachments,
+    )?;
+    // Heights above the body are those of the draped template.
+    let attachments = attach_to_body(model, &draped, &waist, WAISTBAND_STIFFNESS)?;
+    Ok((
+        garments::Garment {
+            positions: draped,
+            ..raw
+        },
+        attachments,
+    ))
+}

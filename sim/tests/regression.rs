@@ -68,3 +68,20 @@ fn convergence() {
 fn determinism() {
     check("determinism");
 }
+#[test]
+fn goldens() {
+    check("golden");
+}
+
+/// The goldens catch a deliberately perturbed parameter: k_s 5% higher moves the skirt by more
+/// than the golden tolerance.
+#[test]
+fn goldens_catch_a_perturbed_stretch_stiffness() {
+    let g = &sim::regress::GOLDENS[0];
+    let frames = sim::regress::simulate_golden(g, 1.05).unwrap();
+    let d = sim::regress::golden_distance(g, &frames).unwrap();
+    assert!(
+        d > sim::regress::GOLDEN_TOLERANCE_CM,
+        "k_s x 1.05 moved the skirt by only {d} cm"
+    );
+}

@@ -9,6 +9,16 @@ use crate::cli::RegressArgs;
 use crate::output::write_json;
 
 pub fn run(args: &RegressArgs) -> Result<()> {
+    if args.bless {
+        let reason = args.reason.as_deref().unwrap_or_default();
+        if reason.trim().is_empty() {
+            bail!("--bless needs a non-empty --reason");
+        }
+        for path in sim::regress::bless(reason)? {
+            println!("blessed {}", path.display());
+        }
+        return Ok(());
+    }
     let outcomes = run_suite(args.long, &args.only)?;
     if outcomes.is_empty() {
         bail!("no scenario matches '{}'", args.only);
