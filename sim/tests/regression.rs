@@ -85,3 +85,7 @@ fn goldens_catch_a_perturbed_stretch_stiffness() {
         "k_s x 1.05 moved the skirt by only {d} cm"
     );
 }
+#[test]
+fn cantilever() {
+    check("cantilever");
+}
