@@ -589,10 +589,10 @@ fn catenary(long: bool) -> Result<Vec<Outcome>> {
 
 /// Cantilever (Peirce / ASTM D1388): a strip clamped at one end with overhang l = 2c,
 /// c = (B / (rho g))^(1/3) and B = 2 sqrt(3) k_b, bends until its chord is 41.5 degrees below
-/// the horizontal (heavy elastica; 41.49 at l/c = 2.0). Known open: converged (1,500
-/// iterations per step, 24 edges along l) the chord reaches 38.7 degrees, i.e. l/c = 1.925 and a
-/// measured strip rigidity of 3.9 k_b instead of 2 sqrt(3) k_b = 3.46 k_b (+12%); with that
-/// factor the angle is 41.2 degrees at 24 edges but 43.1 at 40 (docs/REGRESSION.md).
+/// the horizontal (heavy elastica; 41.49 at l/c = 2.0). `--long` (40 edges, 1,500 iterations
+/// per step) measures 40.7 degrees: B = 2 sqrt(3) k_b holds. The fast version (24 edges, 400
+/// iterations) is too coarse and short (36.7 degrees) and is listed as open
+/// (docs/REGRESSION.md).
 fn cantilever(long: bool) -> Result<Vec<Outcome>> {
     let (k_b, rho) = (1e-4, 0.01);
     let c = (crate::constraints::bending::RIGIDITY_PER_KB * k_b / (rho * G)).cbrt();
