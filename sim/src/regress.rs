@@ -54,7 +54,11 @@ pub struct Scenario {
 
 /// Scenarios whose closed form is not met yet, with the reason (docs/REGRESSION.md); the
 /// suite reports them like the others and `cargo test` checks that they still run.
-pub const KNOWN_OPEN: [&str; 2] = ["hanging_sheet_extension", "cantilever_chord_angle_at_2c"];
+pub const KNOWN_OPEN: [&str; 3] = [
+    "hanging_sheet_extension",
+    "hanging_sheet_segment_extension",
+    "cantilever_chord_angle_at_2c",
+];
 
 /// Every scenario, in report order.
 pub fn scenarios() -> Vec<Scenario> {
@@ -476,9 +480,10 @@ fn accelerating_plate(_long: bool) -> Result<Vec<Outcome>> {
 }
 
 /// Hanging sheet pinned along its top edge: dL = rho g L^2 / (2 E_2D), E_2D = 2 k_s / sqrt 3.
-/// Known open: measured 7.1 mm against 8.4 mm (-16%), the same at 150 and 400 frames (so
-/// converged); 6.3 / 6.9 / 7.2 mm for 0.1 / 0.3 / 1.0 m wide sheets. The closed form assumes
-/// free lateral contraction, the pinned top row forbids it; see `KNOWN_OPEN`.
+/// Known open: measured 7.1 mm against 8.4 mm (-16%), unchanged at 400 frames or 1,000
+/// iterations per step (converged). The segment between 30% and 70% of the length, away from
+/// the pinned row, is 14% short too (2.84 vs 3.30 mm; 2.66-2.97 mm for 0.2-2 m wide sheets), so
+/// the clamped edge does not explain it; see docs/REGRESSION.md.
 fn hanging_sheet(long: bool) -> Result<Vec<Outcome>> {
     let spacing: f64 = if long { 0.025 } else { 0.05 };
     let rows = (1.0 / (spacing * 3f64.sqrt() / 2.0)).round() as usize + 1;
@@ -510,22 +515,44 @@ fn hanging_sheet(long: bool) -> Result<Vec<Outcome>> {
     let mut solver = Solver::new(setup, params, dt)?;
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     advance(&mut solver, &mut state, &mut [], 0..150, dt)?;
-    let bottom: Vec<usize> = ((rows - 1) * columns..rows * columns).collect();
-    // Middle third of the bottom row (away from the free side edges' contraction).
-    let middle: Vec<f64> = bottom[columns / 3..2 * columns / 3]
-        .iter()
-        .map(|&i| -(state.positions[i].y - mesh.rest()[i].y))
-        .collect();
-    let measured = middle.iter().sum::<f64>() / middle.len() as f64;
     let e2d = 2.0 * k_s / 3f64.sqrt();
-    let expected = rho * G * length * length / (2.0 * e2d);
-    Ok(vec![Outcome::new(
-        "hanging_sheet_extension",
-        expected,
-        measured,
-        0.05 * expected,
-        "m",
-    )])
+    let middle_of = |row: usize| row * columns + columns / 3..row * columns + 2 * columns / 3;
+    let sag = |row: usize| -> f64 {
+        let r = middle_of(row);
+        let n = r.len() as f64;
+        r.map(|i| mesh.rest()[i].y - state.positions[i].y)
+            .sum::<f64>()
+            / n
+    };
+    let extension = sag(rows - 1);
+    let whole = rho * G * length * length / (2.0 * e2d);
+    // Saint-Venant: away from the pinned top row the sheet is free to contract sideways, so the
+    // segment between 30% and 70% of the length stretches by rho g ((L-d1)^2 - (L-d2)^2) / (2 E).
+    let (r1, r2) = (
+        (0.3 * (rows - 1) as f64).round() as usize,
+        (0.7 * (rows - 1) as f64).round() as usize,
+    );
+    let depth = |row: usize| -mesh.rest()[row * columns].y;
+    let (d1, d2) = (depth(r1), depth(r2));
+    let segment_expected = rho * G * ((length - d1).powi(2) - (length - d2).powi(2)) / (2.0 * e2d);
+    let segment = sag(r2) - sag(r1);
+    let _ = extension;
+    Ok(vec![
+        Outcome::new(
+            "hanging_sheet_segment_extension",
+            segment_expected,
+            segment,
+            0.05 * segment_expected,
+            "m (rows at 30% and 70% of the length)",
+        ),
+        Outcome::new(
+            "hanging_sheet_extension",
+            whole,
+            extension,
+            0.05 * whole,
+            "m (whole sheet; top row pinned)",
+        ),
+    ])
 }
 
 /// Catenary: a ribbon of length 1.2 m between supports 1 m apart sags 0.2923 m.
