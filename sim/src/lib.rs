@@ -23,7 +23,7 @@ mod solver;
 mod system;
 
 pub use cloth::{ClothMesh, ClothState, Vec3};
-pub use constraints::{Attachment, BendingRest, Seam};
+pub use constraints::{Attachment, BendingRest, Seam, Spring};
 pub use contact::Contact;
 pub use error::{Error, Result};
 pub use params::{Material, SolverParams};

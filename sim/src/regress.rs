@@ -84,6 +84,10 @@ pub fn scenarios() -> Vec<Scenario> {
             run: accelerating_plate,
         },
         Scenario {
+            name: "hanging_chain",
+            run: hanging_chain,
+        },
+        Scenario {
             name: "hanging_sheet",
             run: hanging_sheet,
         },
@@ -473,6 +477,71 @@ fn accelerating_plate(_long: bool) -> Result<Vec<Outcome>> {
         }
     }
     Ok(out)
+}
+
+/// Hanging chain of N equal masses (small stiff triangles) joined by springs of stiffness k:
+/// at equilibrium spring j from the bottom stretches exactly m g j / k.
+fn hanging_chain(_long: bool) -> Result<Vec<Outcome>> {
+    let (links, side, gap, k) = (10usize, 0.01, 0.05, 1.0);
+    let h = side * 3f64.sqrt() / 2.0;
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    // Triangle i (0 = anchor at the top): apex up at y_i, base below; springs join the base's
+    // left vertex of triangle i to the apex of triangle i + 1.
+    for i in 0..=links {
+        let y = -(i as f64) * (h + gap);
+        let base = positions.len() as u32;
+        positions.push(Vec3::new(0.0, y, 0.0));
+        positions.push(Vec3::new(-0.5 * side, y - h, 0.0));
+        positions.push(Vec3::new(0.5 * side, y - h, 0.0));
+        triangles.push([base, base + 1, base + 2]);
+    }
+    let mesh = ClothMesh::new(positions.clone(), triangles)?;
+    let rho = 10.0;
+    let mut setup = ClothSetup::new(
+        mesh.clone(),
+        Material {
+            stretch: 1e5,
+            density: rho,
+            bending: 1e-9,
+        },
+    );
+    setup.pins = vec![0, 1, 2];
+    setup.springs = (0..links as u32)
+        .map(|i| crate::constraints::Spring {
+            a: 3 * i + 1,
+            b: 3 * (i + 1),
+            rest_length: gap,
+            stiffness: k,
+        })
+        .collect();
+    let params = SolverParams {
+        substeps: 2,
+        max_iterations: 300,
+        tolerance: 1e-12,
+        air_damping: 5.0,
+        ..SolverParams::default()
+    };
+    let dt = 1.0 / 30.0;
+    let mut solver = Solver::new(setup, params, dt)?;
+    let mut state = ClothState::at_rest(positions);
+    advance(&mut solver, &mut state, &mut [], 0..450, dt)?;
+    let m = rho * mesh.area() / (links + 1) as f64;
+    let mut worst: f64 = 0.0;
+    for i in 0..links {
+        let (a, b) = (3 * i + 1, 3 * (i + 1));
+        let stretch = (state.positions[a] - state.positions[b]).norm() - gap;
+        let from_bottom = (links - i) as f64;
+        let expected = m * G * from_bottom / k;
+        worst = worst.max((stretch / expected - 1.0).abs());
+    }
+    Ok(vec![Outcome::new(
+        "hanging_chain_spring_stretch_relative_error",
+        0.0,
+        worst,
+        1e-6,
+        "1 (max over springs)",
+    )])
 }
 
 /// Hanging sheet pinned along its top edge: dL = rho g L^2 / (2 E_2D), E_2D = 2 k_s / sqrt 3.

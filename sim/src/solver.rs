@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::cloth::{ClothMesh, ClothState, Vec3};
-use crate::constraints::{Attachment, BendingRest, Constraints, ProjectionInputs, Seam};
+use crate::constraints::{Attachment, BendingRest, Constraints, ProjectionInputs, Seam, Spring};
 use crate::contact::Contact;
 use crate::error::{Error, Result};
 use crate::obstacles::{DetectionInput, Obstacle};
@@ -47,6 +47,8 @@ pub struct ClothSetup {
     pub bending_rest: BendingRest,
     /// Seams (zero-length springs) between vertex pairs.
     pub seams: Vec<Seam>,
+    /// Extra springs with their own rest length and stiffness.
+    pub springs: Vec<Spring>,
     /// Springs to moving targets (set with [`Solver::set_attachment_targets`]).
     pub attachments: Vec<Attachment>,
     /// Pinned vertices (velocity prescribed by their target positions).
@@ -61,6 +63,7 @@ impl ClothSetup {
             material,
             bending_rest: BendingRest::Flat,
             seams: Vec::new(),
+            springs: Vec::new(),
             attachments: Vec::new(),
             pins: Vec::new(),
         }
@@ -195,6 +198,16 @@ impl Solver {
                 return Err(Error::Setting(format!("bad seam {s:?} ({n} vertices)")));
             }
         }
+        for s in &setup.springs {
+            if s.a as usize >= n
+                || s.b as usize >= n
+                || s.a == s.b
+                || !(s.stiffness > 0.0 && s.stiffness.is_finite())
+                || !(s.rest_length >= 0.0 && s.rest_length.is_finite())
+            {
+                return Err(Error::Setting(format!("bad spring {s:?} ({n} vertices)")));
+            }
+        }
         for a in &setup.attachments {
             if a.vertex as usize >= n || !(a.stiffness > 0.0 && a.stiffness.is_finite()) {
                 return Err(Error::Setting(format!(
@@ -208,6 +221,7 @@ impl Solver {
             &setup.material,
             setup.bending_rest,
             &setup.seams,
+            &setup.springs,
             &setup.attachments,
         );
         let (incidence_ptr, incidence) = constraints.incidence(n);
@@ -266,6 +280,7 @@ impl Solver {
             &material,
             self.setup.bending_rest,
             &self.setup.seams,
+            &self.setup.springs,
             &self.setup.attachments,
         );
         let (ptr, inc) = self.constraints.incidence(self.masses.len());

@@ -89,3 +89,7 @@ fn goldens_catch_a_perturbed_stretch_stiffness() {
 fn cantilever() {
     check("cantilever");
 }
+#[test]
+fn hanging_chain() {
+    check("hanging_chain");
+}

@@ -7,11 +7,13 @@
 mod attachments;
 pub mod bending;
 mod seams;
+mod springs;
 mod stretch;
 
 pub use attachments::Attachment;
 pub use bending::BendingRest;
 pub use seams::Seam;
+pub use springs::Spring;
 
 use crate::cloth::{ClothMesh, Vec3};
 use crate::params::Material;
@@ -49,14 +51,15 @@ pub(crate) struct ProjectionInputs<'a> {
 }
 
 impl Constraints {
-    /// Stretch springs on every edge and bending on every interior vertex, then seams and
-    /// attachments, weighted by `material` (k_s per edge, k_b per bending term) and their own
+    /// Stretch springs on every edge and bending on every interior vertex, then seams, extra
+    /// springs and attachments, weighted by `material` (k_s per edge, k_b per bending term) and their own
     /// stiffness.
     pub fn build(
         mesh: &ClothMesh,
         material: &Material,
         bending_rest: BendingRest,
         seams: &[Seam],
+        springs: &[Spring],
         attachments: &[Attachment],
     ) -> Self {
         let mut c = Self::default();
@@ -64,6 +67,7 @@ impl Constraints {
         stretch::add(&mut c, mesh, material.stretch);
         bending::add(&mut c, mesh, material.bending, bending_rest);
         seams::add(&mut c, seams);
+        springs::add(&mut c, springs);
         attachments::add(&mut c, attachments);
         c
     }
