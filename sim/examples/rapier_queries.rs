@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use motions::{BodyModel, FramePose, canonical_a_pose};
+use motions::BodyModel;
 use parry3d::math::Vector;
 use parry3d::query::{DefaultQueryDispatcher, PointQuery, PointQueryWithLocation};
 use parry3d::shape::{TriMesh, TriMeshFlags};
@@ -15,16 +15,7 @@ use rapier3d::prelude::{
 
 fn main() {
     let model = BodyModel::default_body();
-    let shaped = model.shape(&[]).unwrap();
-    let body = model
-        .pose(
-            &shaped,
-            &FramePose {
-                pose: canonical_a_pose(),
-                transl: [0.0; 3],
-            },
-        )
-        .unwrap();
+    let body = sim::scene::canonical_body(&model).unwrap();
     let vertices: Vec<Vector> = body
         .vertices
         .iter()

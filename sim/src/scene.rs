@@ -82,6 +82,17 @@ impl BodyAttachment {
     }
 }
 
+/// The body templates are made on: default shape (betas = 0), canonical A-pose, no root
+/// translation.
+pub fn canonical_body(model: &BodyModel) -> Result<PosedBody> {
+    let shaped = model.shape(&[])?;
+    let canonical = FramePose {
+        pose: canonical_a_pose(),
+        transl: [0.0; 3],
+    };
+    Ok(model.pose(&shaped, &canonical)?)
+}
+
 /// Attaches the given cloth vertices (template positions on the canonical body) to their
 /// closest body surface points, with `stiffness` N/m each.
 pub fn attach_to_body(
@@ -90,14 +101,7 @@ pub fn attach_to_body(
     vertices: &[u32],
     stiffness: f64,
 ) -> Result<Vec<BodyAttachment>> {
-    let shaped = model.shape(&[])?;
-    let body = model.pose(
-        &shaped,
-        &FramePose {
-            pose: canonical_a_pose(),
-            transl: [0.0; 3],
-        },
-    )?;
+    let body = canonical_body(model)?;
     let faces = model.faces();
     let mut out = Vec::with_capacity(vertices.len());
     for &v in vertices {
@@ -548,14 +552,7 @@ pub fn drape_on_canonical_body(
     frames: usize,
     attachments: &[BodyAttachment],
 ) -> Result<(Vec<[f64; 3]>, f64)> {
-    let shaped = model.shape(&[])?;
-    let body = model.pose(
-        &shaped,
-        &FramePose {
-            pose: canonical_a_pose(),
-            transl: [0.0; 3],
-        },
-    )?;
+    let body = canonical_body(model)?;
     let mesh = ClothMesh::new(to_vec3(positions), triangles.to_vec())?;
     let params = SolverParams {
         substeps: 2,
@@ -601,14 +598,7 @@ pub fn builtin_template(
     name: &str,
     params: &garments::SkirtParams,
 ) -> Result<(garments::Garment, Vec<BodyAttachment>)> {
-    let shaped = model.shape(&[])?;
-    let body = model.pose(
-        &shaped,
-        &FramePose {
-            pose: canonical_a_pose(),
-            transl: [0.0; 3],
-        },
-    )?;
+    let body = canonical_body(model)?;
     let raw =
         garments::skirt(name, &body.vertices, params).map_err(|e| Error::Setting(e.to_string()))?;
     let waist: Vec<u32> = (0..params.columns as u32).collect();

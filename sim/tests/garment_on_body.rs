@@ -2,37 +2,15 @@
 //! built-in skirt (waistband attached) on the default body, penetration at most 1 cm.
 
 use motions::library::MotionSpec;
-use motions::{BlendIn, BodyModel, FramePose, canonical_a_pose};
-use sim::scene::{Scene, attach_to_body, drape_on_canonical_body};
+use motions::{BlendIn, BodyModel};
+use sim::scene::{Scene, builtin_template};
 use sim::{Material, SolverParams};
 
 fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
     let model = BodyModel::default_body();
-    let rest = model.shape(&[]).unwrap();
-    let canonical = model
-        .pose(
-            &rest,
-            &FramePose {
-                pose: canonical_a_pose(),
-                transl: [0.0; 3],
-            },
-        )
-        .unwrap();
     let params = garments::SkirtParams::default();
-    let raw = garments::skirt("default", &canonical.vertices, &params).unwrap();
-    let waist: Vec<u32> = (0..params.columns as u32).collect();
-    let attachments = attach_to_body(&model, &raw.positions, &waist, 20.0).unwrap();
-    let (template, _) = drape_on_canonical_body(
-        &model,
-        &raw.positions,
-        &raw.triangles,
-        Material::default(),
-        0.5,
-        20,
-        &attachments,
-    )
-    .unwrap();
-    let attachments = attach_to_body(&model, &template, &waist, 20.0).unwrap();
+    let (garment, attachments) = builtin_template(&model, "default", &params).unwrap();
+    let (template, triangles) = (garment.positions, garment.triangles);
     let shaped = model.shape(betas).unwrap();
     let motion = MotionSpec::parse(motion)
         .unwrap()
@@ -40,7 +18,7 @@ fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
         .unwrap();
     let scene = Scene {
         template,
-        triangles: raw.triangles.clone(),
+        triangles,
         betas: betas.to_vec(),
         motion,
         blend: BlendIn {

@@ -108,29 +108,14 @@ mod tests {
     /// matches the plate energy (B/2) kappa^2 A with B = 2 sqrt(3) k_b over the interior.
     #[test]
     fn energy_matches_plate_energy_on_a_cylinder() {
-        let n = 41;
-        let mut rest = Vec::new();
-        let h = 0.01;
-        let row = h * 3f64.sqrt() / 2.0;
-        for i in 0..n {
-            for j in 0..n {
-                let shift = if i % 2 == 1 { 0.5 * h } else { 0.0 };
-                rest.push(Vec3::new(j as f64 * h + shift, 0.0, i as f64 * row));
-            }
-        }
-        let mut tris = Vec::new();
-        let id = |i: usize, j: usize| (i * n + j) as u32;
-        for i in 0..n - 1 {
-            for j in 0..n - 1 {
-                if i % 2 == 0 {
-                    tris.push([id(i, j), id(i + 1, j), id(i, j + 1)]);
-                    tris.push([id(i, j + 1), id(i + 1, j), id(i + 1, j + 1)]);
-                } else {
-                    tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-                    tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                }
-            }
-        }
+        // The equilateral sheet laid in the x-z plane.
+        let sheet = ClothMesh::equilateral(41, 41, 0.01).unwrap();
+        let rest: Vec<Vec3> = sheet
+            .rest()
+            .iter()
+            .map(|p| Vec3::new(p.x, 0.0, -p.y))
+            .collect();
+        let tris = sheet.triangles().to_vec();
         let mesh = ClothMesh::new(rest.clone(), tris).unwrap();
         let k_b = 1e-4;
         let material = Material {

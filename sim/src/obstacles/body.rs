@@ -220,18 +220,7 @@ impl Obstacle for AnimatedMesh {
                             track.side = if s.distance < 0.0 { -1 } else { 1 };
                             track.clearance = s.distance.abs();
                             track.at = p;
-                            if s.distance < tolerance {
-                                local.push(Contact::from_query(
-                                    i as u32,
-                                    s.distance,
-                                    s.normal,
-                                    s.velocity,
-                                    p - input.positions[i],
-                                    input.h,
-                                    friction,
-                                    input.params,
-                                ));
-                            }
+                            local.extend(input.contact(i, &s, friction));
                         }
                         None => {
                             track.clearance = reach;

@@ -29,6 +29,25 @@ pub struct DetectionInput<'a> {
     pub params: &'a SolverParams,
 }
 
+impl DetectionInput<'_> {
+    /// The contact of vertex `i` with the surface point found for its predicted position, if
+    /// that point is within the contact band.
+    pub fn contact(&self, i: usize, s: &SurfacePoint, friction: f64) -> Option<Contact> {
+        (s.distance < self.params.contact_tolerance).then(|| {
+            Contact::from_query(
+                i as u32,
+                s.distance,
+                s.normal,
+                s.velocity,
+                self.predicted[i] - self.positions[i],
+                self.h,
+                friction,
+                self.params,
+            )
+        })
+    }
+}
+
 /// Signed distance, outward normal and surface velocity of an obstacle at a point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfacePoint {
@@ -76,19 +95,8 @@ pub fn detect_each<O: Obstacle + ?Sized>(
             let mut local = Vec::new();
             for (k, &p) in points.iter().enumerate() {
                 let i = chunk * 1024 + k;
-                if let Some(s) = obstacle.surface_point(p, tolerance)
-                    && s.distance < tolerance
-                {
-                    local.push(Contact::from_query(
-                        i as u32,
-                        s.distance,
-                        s.normal,
-                        s.velocity,
-                        p - input.positions[i],
-                        input.h,
-                        friction,
-                        input.params,
-                    ));
+                if let Some(s) = obstacle.surface_point(p, tolerance) {
+                    local.extend(input.contact(i, &s, friction));
                 }
             }
             local
