@@ -111,7 +111,10 @@ pub fn garment(
 ) -> Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
     let path = Path::new(source);
     if source.ends_with(".obj") || path.exists() {
-        return Ok((garments::read_obj(path)?, Vec::new()));
+        let raw = garments::read_obj(path)?;
+        let (template, _) =
+            garments::repair(&raw, 1.0).with_context(|| format!("garment file {source}"))?;
+        return Ok((template, Vec::new()));
     }
     sim::scene::builtin_template(model, source, &garments::SkirtParams::default())
         .with_context(|| format!("preparing built-in garment '{source}'"))

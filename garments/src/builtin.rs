@@ -141,6 +141,9 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
         params.columns,
     );
     g.name = "skirt".into();
+    g.panels = vec!["skirt".into()];
+    g.vertex_labels
+        .insert("waistband".into(), (0..params.columns as u32).collect());
     g.validate()?;
     Ok(g)
 }
@@ -211,13 +214,7 @@ pub(crate) fn tube(
             }
         }
     }
-    Garment {
-        name: name.to_string(),
-        positions,
-        triangles,
-        uvs,
-        uv_triangles,
-    }
+    Garment::single_panel(name, positions, triangles, uvs, uv_triangles)
 }
 
 #[cfg(test)]

@@ -1,16 +1,22 @@
 //! Garment templates for the engine and the surrogate: the garment mesh type (positions,
-//! triangles and per-corner UVs), OBJ import and export, and the built-in garments.
+//! triangles, per-corner UVs, panels and vertex labels), OBJ import and export with groups,
+//! PLY export, validation with documented repairs, GarmentCode sewing patterns (parsed,
+//! meshed with constrained Delaunay refinement, stitched, UV-packed), the parametric design
+//! library, and the built-in skirt.
 //!
 //! A template is aligned to the body in its canonical A-pose (betas = 0, no root translation):
-//! its positions are where the garment rests on that body.
+//! its positions are where the garment rests on that body. Draping a sewn pattern into a
+//! template is a simulation, done by `sim::sewing`.
 #![warn(missing_docs)]
 
 mod builtin;
+mod check;
 mod error;
 mod mesh;
 mod obj;
 
 pub use builtin::{BUILTIN, SkirtParams, builtin_names, skirt};
+pub use check::{CheckReport, Finding, MAX_EXTENT_M, MIN_EXTENT_M, check, repair};
 pub use error::{Error, Result};
 pub use mesh::Garment;
-pub use obj::{read_obj, write_obj};
+pub use obj::{read_obj, write_obj, write_ply};

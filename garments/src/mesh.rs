@@ -1,12 +1,15 @@
-//! The garment mesh: 3D positions with triangles, and a UV layout with its own triangles
-//! (a vertex on a seam of the UV layout has one UV per side).
+//! The garment mesh: 3D positions with triangles, a UV layout with its own triangles (a vertex
+//! on a seam has one UV per panel it joins), a panel label per triangle and optional named
+//! vertex sets (edge labels of a sewing pattern, such as a collar or a hem).
+
+use std::collections::BTreeMap;
 
 use crate::error::{Error, Result};
 
 /// A garment template.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Garment {
-    /// Name (built-in name or file stem).
+    /// Name (library name, built-in name or file stem).
     pub name: String,
     /// Vertex positions, metres, aligned to the body in its canonical pose.
     pub positions: Vec<[f64; 3]>,
@@ -16,57 +19,93 @@ pub struct Garment {
     pub uvs: Vec<[f64; 2]>,
     /// Triangles over `uvs`, one per entry of `triangles` (per-corner UVs).
     pub uv_triangles: Vec<[u32; 3]>,
+    /// Panel names; `triangle_panels` indexes them.
+    pub panels: Vec<String>,
+    /// The panel of each triangle.
+    pub triangle_panels: Vec<u32>,
+    /// Named vertex sets (sorted, unique vertex indices).
+    pub vertex_labels: BTreeMap<String, Vec<u32>>,
 }
 
 impl Garment {
-    /// Checks indices, finiteness, UV range and degenerate triangles.
+    /// A garment made of one panel.
+    pub fn single_panel(
+        name: &str,
+        positions: Vec<[f64; 3]>,
+        triangles: Vec<[u32; 3]>,
+        uvs: Vec<[f64; 2]>,
+        uv_triangles: Vec<[u32; 3]>,
+    ) -> Self {
+        let count = triangles.len();
+        Self {
+            name: name.to_string(),
+            positions,
+            triangles,
+            uvs,
+            uv_triangles,
+            panels: vec![name.to_string()],
+            triangle_panels: vec![0; count],
+            vertex_labels: BTreeMap::new(),
+        }
+    }
+
+    /// Checks what the engine and the surrogate rely on: indices in range, finite values, a
+    /// UV triangle and a panel per triangle, UVs in [0, 1], no triangle repeating a vertex.
+    /// [`crate::check`] reports more (manifoldness, orientation, scale) and repairs.
     pub fn validate(&self) -> Result<()> {
+        let invalid = |m: String| Err(Error::Invalid(format!("'{}': {m}", self.name)));
         let n = self.positions.len();
         if self.triangles.is_empty() {
-            return Err(Error::Invalid(format!("'{}' has no triangles", self.name)));
+            return invalid("no triangles".into());
         }
         if let Some(i) = self
             .positions
             .iter()
             .position(|p| !p.iter().all(|c| c.is_finite()))
         {
-            return Err(Error::Invalid(format!(
-                "'{}': vertex {i} is not finite",
-                self.name
-            )));
+            return invalid(format!("vertex {i} is not finite"));
         }
         if self.uv_triangles.len() != self.triangles.len() {
-            return Err(Error::Invalid(format!(
-                "'{}': {} UV triangles for {} triangles",
-                self.name,
+            return invalid(format!(
+                "{} UV triangles for {} triangles",
                 self.uv_triangles.len(),
                 self.triangles.len()
-            )));
+            ));
+        }
+        if self.triangle_panels.len() != self.triangles.len() {
+            return invalid(format!(
+                "{} panel labels for {} triangles",
+                self.triangle_panels.len(),
+                self.triangles.len()
+            ));
+        }
+        if let Some(t) = self
+            .triangle_panels
+            .iter()
+            .position(|&p| p as usize >= self.panels.len())
+        {
+            return invalid(format!("triangle {t} names a panel that does not exist"));
         }
         for (t, (tri, uv)) in self.triangles.iter().zip(&self.uv_triangles).enumerate() {
             if tri.iter().any(|&v| v as usize >= n)
                 || uv.iter().any(|&v| v as usize >= self.uvs.len())
             {
-                return Err(Error::Invalid(format!(
-                    "'{}': triangle {t} has an index out of range",
-                    self.name
-                )));
+                return invalid(format!("triangle {t} has an index out of range"));
             }
             if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
-                return Err(Error::Invalid(format!(
-                    "'{}': triangle {t} repeats a vertex",
-                    self.name
-                )));
+                return invalid(format!("triangle {t} repeats a vertex"));
             }
         }
         if let Some(i) = self.uvs.iter().position(|uv| {
             !uv.iter()
                 .all(|c| c.is_finite() && (-1e-9..=1.0 + 1e-9).contains(c))
         }) {
-            return Err(Error::Invalid(format!(
-                "'{}': UV {i} {:?} is outside [0, 1]",
-                self.name, self.uvs[i]
-            )));
+            return invalid(format!("UV {i} {:?} is outside [0, 1]", self.uvs[i]));
+        }
+        for (label, vertices) in &self.vertex_labels {
+            if vertices.iter().any(|&v| v as usize >= n) {
+                return invalid(format!("vertex label '{label}' has an index out of range"));
+            }
         }
         Ok(())
     }
@@ -74,5 +113,18 @@ impl Garment {
     /// Vertex count.
     pub fn num_vertices(&self) -> usize {
         self.positions.len()
+    }
+
+    /// Axis-aligned bounding box (min, max) of the positions.
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
     }
 }

@@ -1,12 +1,20 @@
-//! OBJ import and export with UVs (tobj reads; writing is a few lines of text).
+//! OBJ import and export with UVs and groups, PLY export. tobj reads OBJ; writing either
+//! format is a few lines of text, so no crate is used for it.
+//!
+//! Panels are OBJ groups (`g name`). tobj gives every group its own copy of the vertices it
+//! uses, so vertices of different groups at exactly the same position are welded back into
+//! one (a seam between panels); vertices within one group are kept as they are.
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::mesh::Garment;
 
-/// Reads an OBJ with `vt` coordinates (all objects merged, polygons triangulated).
+/// Reads an OBJ: every group becomes a panel, polygons are triangulated. Only unreadable files
+/// are refused here; [`crate::check`] reports what is wrong with the mesh itself (a file
+/// without `vt` lines reads with no UVs, which the check reports).
 pub fn read_obj(path: &Path) -> Result<Garment> {
     let name = path.display().to_string();
     let options = tobj::LoadOptions {
@@ -25,54 +33,79 @@ pub fn read_obj(path: &Path) -> Result<Garment> {
             message: format!("not a readable OBJ: {other}"),
         },
     })?;
+    if models.iter().all(|m| m.mesh.indices.is_empty()) {
+        return Err(Error::Format {
+            path: name,
+            message: "no faces".into(),
+        });
+    }
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let mut g = Garment {
-        name: path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-        positions: Vec::new(),
-        triangles: Vec::new(),
-        uvs: Vec::new(),
-        uv_triangles: Vec::new(),
+        name: stem.clone(),
+        ..Garment::default()
     };
+    // Exact-position weld across groups.
+    let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
     for model in models {
         let m = model.mesh;
-        if m.texcoords.is_empty() {
-            return Err(Error::Format {
-                path: name,
-                message: format!(
-                    "object '{}' has no UVs (vt lines); templates need them",
-                    model.name
-                ),
-            });
+        if m.indices.is_empty() {
+            continue;
         }
-        let (p0, t0) = (g.positions.len() as u32, g.uvs.len() as u32);
-        g.positions.extend(
-            m.positions
-                .chunks(3)
-                .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]),
-        );
-        g.uvs
-            .extend(m.texcoords.chunks(2).map(|c| [c[0] as f64, c[1] as f64]));
+        let panel = if model.name.is_empty() || model.name == "unnamed_object" {
+            stem.clone()
+        } else {
+            model.name.clone()
+        };
+        let panel_index = match g.panels.iter().position(|p| *p == panel) {
+            Some(i) => i,
+            None => {
+                g.panels.push(panel);
+                g.panels.len() - 1
+            }
+        } as u32;
+        let local: Vec<u32> = m
+            .positions
+            .chunks(3)
+            .map(|c| {
+                let p = [c[0] as f64, c[1] as f64, c[2] as f64];
+                let key = p.map(f64::to_bits);
+                *welded.entry(key).or_insert_with(|| {
+                    g.positions.push(p);
+                    g.positions.len() as u32 - 1
+                })
+            })
+            .collect();
         g.triangles.extend(
             m.indices
                 .chunks(3)
-                .map(|c| [c[0] + p0, c[1] + p0, c[2] + p0]),
+                .map(|c| [c[0], c[1], c[2]].map(|i| local[i as usize])),
         );
-        g.uv_triangles.extend(
-            m.texcoord_indices
-                .chunks(3)
-                .map(|c| [c[0] + t0, c[1] + t0, c[2] + t0]),
-        );
+        g.triangle_panels
+            .extend(std::iter::repeat_n(panel_index, m.indices.len() / 3));
+        if !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len() {
+            let t0 = g.uvs.len() as u32;
+            g.uvs
+                .extend(m.texcoords.chunks(2).map(|c| [c[0] as f64, c[1] as f64]));
+            g.uv_triangles.extend(
+                m.texcoord_indices
+                    .chunks(3)
+                    .map(|c| [c[0] + t0, c[1] + t0, c[2] + t0]),
+            );
+        }
     }
-    g.validate().map_err(|e| Error::Format {
-        path: name,
-        message: e.to_string(),
-    })?;
+    if g.uv_triangles.len() != g.triangles.len() {
+        // Some group lacks UVs: the whole mesh is reported as having none.
+        g.uvs.clear();
+        g.uv_triangles.clear();
+    }
     Ok(g)
 }
 
-/// Writes the garment as OBJ text (v, vt, f v/vt) to `out`.
+/// Writes the garment as OBJ text (v, vt, one `g` group per panel, f v/vt) to `out`, at
+/// `positions` when given (a simulated frame) or the template positions.
 pub fn write_obj<W: Write>(
     out: &mut W,
     garment: &Garment,
@@ -80,10 +113,11 @@ pub fn write_obj<W: Write>(
 ) -> std::io::Result<()> {
     writeln!(
         out,
-        "# {} ({} vertices, {} triangles)",
+        "# {} ({} vertices, {} triangles, {} panels)",
         garment.name,
         garment.positions.len(),
-        garment.triangles.len()
+        garment.triangles.len(),
+        garment.panels.len()
     )?;
     for p in positions.unwrap_or(&garment.positions) {
         writeln!(out, "v {:.6} {:.6} {:.6}", p[0], p[1], p[2])?;
@@ -91,17 +125,63 @@ pub fn write_obj<W: Write>(
     for uv in &garment.uvs {
         writeln!(out, "vt {:.6} {:.6}", uv[0], uv[1])?;
     }
-    for (t, uv) in garment.triangles.iter().zip(&garment.uv_triangles) {
-        writeln!(
-            out,
-            "f {}/{} {}/{} {}/{}",
-            t[0] + 1,
-            uv[0] + 1,
-            t[1] + 1,
-            uv[1] + 1,
-            t[2] + 1,
-            uv[2] + 1
-        )?;
+    for (panel, panel_name) in garment.panels.iter().enumerate() {
+        writeln!(out, "g {panel_name}")?;
+        for ((t, uv), _) in garment
+            .triangles
+            .iter()
+            .zip(&garment.uv_triangles)
+            .zip(&garment.triangle_panels)
+            .filter(|(_, p)| **p as usize == panel)
+        {
+            writeln!(
+                out,
+                "f {}/{} {}/{} {}/{}",
+                t[0] + 1,
+                uv[0] + 1,
+                t[1] + 1,
+                uv[1] + 1,
+                t[2] + 1,
+                uv[2] + 1
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes the garment as binary little-endian PLY: float vertices, and faces with their
+/// per-corner UVs (`texcoord`, 6 floats) and panel index, the layout MeshLab and Blender read.
+pub fn write_ply<W: Write>(out: &mut W, garment: &Garment) -> std::io::Result<()> {
+    write!(
+        out,
+        "ply\nformat binary_little_endian 1.0\ncomment {} panels: {}\n\
+         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\n\
+         property list uchar float texcoord\nproperty int panel\nend_header\n",
+        garment.name,
+        garment.panels.join(","),
+        garment.positions.len(),
+        garment.triangles.len()
+    )?;
+    for p in &garment.positions {
+        for c in p {
+            out.write_all(&(*c as f32).to_le_bytes())?;
+        }
+    }
+    for (t, tri) in garment.triangles.iter().enumerate() {
+        out.write_all(&[3u8])?;
+        for v in tri {
+            out.write_all(&(*v as i32).to_le_bytes())?;
+        }
+        out.write_all(&[6u8])?;
+        let uv = garment.uv_triangles.get(t).copied().unwrap_or([0; 3]);
+        for i in uv {
+            let c = garment.uvs.get(i as usize).copied().unwrap_or([0.0; 2]);
+            out.write_all(&(c[0] as f32).to_le_bytes())?;
+            out.write_all(&(c[1] as f32).to_le_bytes())?;
+        }
+        let panel = garment.triangle_panels.get(t).copied().unwrap_or(0);
+        out.write_all(&(panel as i32).to_le_bytes())?;
     }
     Ok(())
 }
@@ -111,44 +191,77 @@ mod tests {
     use super::*;
 
     #[test]
-    fn round_trip_and_errors() {
-        let g = crate::builtin::tube_for_tests();
+    fn round_trip_keeps_panels_and_welds_seams() {
+        let mut g = crate::builtin::tube_for_tests();
+        // Two panels: front and back halves of the tube.
+        g.panels = vec!["front".into(), "back".into()];
+        g.triangle_panels = (0..g.triangles.len() as u32).map(|t| t % 2).collect();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("tube.obj");
         let mut f = std::fs::File::create(&path).unwrap();
         write_obj(&mut f, &g, None).unwrap();
         drop(f);
         let back = read_obj(&path).unwrap();
-        // tobj renumbers vertices in order of use: compare the triangles' corners.
+        back.validate().unwrap();
+        assert_eq!(back.panels, g.panels);
+        assert_eq!(back.positions.len(), g.positions.len(), "seams welded");
         assert_eq!(back.triangles.len(), g.triangles.len());
-        for t in 0..g.triangles.len() {
+        // Triangles come back grouped by panel: match them by corner positions.
+        let key = |gm: &Garment, t: usize| {
+            let mut corners: Vec<[i64; 3]> = gm.triangles[t]
+                .iter()
+                .map(|&v| gm.positions[v as usize].map(|c| (c * 1e5).round() as i64))
+                .collect();
+            corners.sort();
+            (corners, gm.panels[gm.triangle_panels[t] as usize].clone())
+        };
+        let mut a: Vec<_> = (0..g.triangles.len()).map(|t| key(&g, t)).collect();
+        let mut b: Vec<_> = (0..back.triangles.len()).map(|t| key(&back, t)).collect();
+        a.sort();
+        b.sort();
+        assert_eq!(a, b);
+        for t in 0..back.triangles.len() {
             for k in 0..3 {
-                let (a, b) = (
-                    back.positions[back.triangles[t][k] as usize],
-                    g.positions[g.triangles[t][k] as usize],
-                );
-                assert!(
-                    (0..3).all(|c| (a[c] - b[c]).abs() < 1e-5),
-                    "triangle {t} corner {k}"
-                );
-                let (u, w) = (
-                    back.uvs[back.uv_triangles[t][k] as usize],
-                    g.uvs[g.uv_triangles[t][k] as usize],
-                );
-                assert!(
-                    (0..2).all(|c| (u[c] - w[c]).abs() < 1e-5),
-                    "triangle {t} UV corner {k}"
-                );
+                let uv = back.uvs[back.uv_triangles[t][k] as usize];
+                assert!(uv.iter().all(|c| (0.0..=1.0).contains(c)));
             }
         }
+    }
 
+    #[test]
+    fn unreadable_files_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
         let bad = dir.path().join("no_uv.obj");
         std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-        let e = read_obj(&bad).unwrap_err().to_string();
-        assert!(e.contains("no_uv.obj") && e.contains("no UVs"), "{e}");
+        let g = read_obj(&bad).unwrap();
+        assert!(g.uv_triangles.is_empty(), "read, reported by the check");
+        let empty = dir.path().join("empty.obj");
+        std::fs::write(&empty, "v 0 0 0\n").unwrap();
+        let e = read_obj(&empty).unwrap_err().to_string();
+        assert!(e.contains("empty.obj") && e.contains("no faces"), "{e}");
         let missing = read_obj(&dir.path().join("missing.obj"))
             .unwrap_err()
             .to_string();
         assert!(missing.contains("missing.obj"), "{missing}");
+    }
+
+    #[test]
+    fn ply_header_and_size() {
+        let g = crate::builtin::tube_for_tests();
+        let mut bytes = Vec::new();
+        write_ply(&mut bytes, &g).unwrap();
+        let header_end = bytes
+            .windows(11)
+            .position(|w| w == b"end_header\n")
+            .unwrap()
+            + 11;
+        let header = std::str::from_utf8(&bytes[..header_end]).unwrap();
+        assert!(header.contains(&format!("element vertex {}", g.positions.len())));
+        assert!(header.contains(&format!("element face {}", g.triangles.len())));
+        let body = bytes.len() - header_end;
+        assert_eq!(
+            body,
+            g.positions.len() * 12 + g.triangles.len() * (1 + 12 + 1 + 24 + 4)
+        );
     }
 }
