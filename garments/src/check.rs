@@ -464,26 +464,30 @@ fn inward_pieces(
     }
     pieces
         .into_iter()
-        .filter(|piece| outward_score(positions, triangles, piece) < 0.0)
+        .filter(|piece| outward_score(positions, triangles, piece, None) < 0.0)
         .collect()
 }
 
-/// Sum over triangles of (doubled area-weighted normal) . (centroid - vertical axis through
-/// the piece's mean position), horizontal components only: positive when the piece faces out.
+/// Sum over triangles of (doubled area-weighted normal) . (centroid - a vertical axis through
+/// `axis` (x, z), by default the piece's mean position), horizontal components only: positive
+/// when the piece faces out.
 pub(crate) fn outward_score(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     piece: &[usize],
+    axis: Option<[f64; 2]>,
 ) -> f64 {
-    let mut centre = [0.0; 2];
-    for &t in piece {
-        for &v in &triangles[t] {
-            centre[0] += positions[v as usize][0];
-            centre[1] += positions[v as usize][2];
+    let centre = axis.unwrap_or_else(|| {
+        let mut centre = [0.0; 2];
+        for &t in piece {
+            for &v in &triangles[t] {
+                centre[0] += positions[v as usize][0];
+                centre[1] += positions[v as usize][2];
+            }
         }
-    }
-    let count = 3.0 * piece.len() as f64;
-    centre = centre.map(|c| c / count);
+        let count = 3.0 * piece.len() as f64;
+        centre.map(|c| c / count)
+    });
     piece
         .iter()
         .map(|&t| {

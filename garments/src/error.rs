@@ -24,6 +24,9 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// The sewing pattern is malformed or inconsistent.
+    #[error("invalid sewing pattern: {0}")]
+    Pattern(String),
     /// The mesh is invalid.
     #[error("invalid garment mesh: {0}")]
     Invalid(String),

@@ -14,9 +14,11 @@ mod check;
 mod error;
 mod mesh;
 mod obj;
+pub mod pattern;
 
 pub use builtin::{BUILTIN, SkirtParams, builtin_names, skirt};
 pub use check::{CheckReport, Finding, MAX_EXTENT_M, MIN_EXTENT_M, check, repair};
 pub use error::{Error, Result};
 pub use mesh::Garment;
 pub use obj::{read_obj, write_obj, write_ply};
+pub use pattern::{Pattern, SewnMesh};

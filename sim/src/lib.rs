@@ -19,6 +19,7 @@ mod params;
 pub mod recording;
 pub mod regress;
 pub mod scene;
+pub mod sewing;
 mod solver;
 mod system;
 

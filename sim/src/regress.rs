@@ -236,7 +236,7 @@ fn momentum(_long: bool) -> Result<Vec<Outcome>> {
             ..SolverParams::default()
         };
         let mut solver = Solver::new(elastic_setup(&mesh, true), params, 1.0 / 30.0)?;
-        solver.set_seam_opening(0.5);
+        solver.set_seam_length_cap(0.05);
         let mut state = scrambled(&mesh);
         let p = |s: &ClothState, m: &[f64]| -> Vec3 {
             s.velocities.iter().zip(m).map(|(v, m)| v * *m).sum()

@@ -163,7 +163,7 @@ pub struct Solver {
     pinned: Vec<bool>,
     pin_targets: Vec<Vec3>,
     attachment_targets: Vec<Vec3>,
-    seam_opening: f64,
+    seam_length_cap: f64,
     systems: BTreeMap<usize, GlobalSystem>,
     symbolic: [Option<Symbolic>; 2],
     ws: Workspace,
@@ -246,7 +246,7 @@ impl Solver {
             pinned,
             pin_targets,
             attachment_targets,
-            seam_opening: 1.0,
+            seam_length_cap: f64::INFINITY,
             systems: BTreeMap::new(),
             symbolic: [None, None],
             ws: Workspace {
@@ -343,9 +343,17 @@ impl Solver {
         self.attachment_targets.copy_from_slice(targets);
     }
 
-    /// Sets how open the seams are: 1 = no pull, 0 = fully closed (the seam ramp).
-    pub fn set_seam_opening(&mut self, opening: f64) {
-        self.seam_opening = opening.clamp(0.0, 1.0);
+    /// Sets gravity (m/s^2, acting along -y) and air damping (1/s); neither is part of the
+    /// factorized matrix, so this is free (sewing closes seams without gravity, then drapes).
+    pub fn set_gravity_and_damping(&mut self, gravity: f64, air_damping: f64) {
+        self.params.gravity = gravity;
+        self.params.air_damping = air_damping;
+    }
+
+    /// Caps the gap every seam keeps, m: infinite (the start) = no pull, 0 = fully closed.
+    /// Lowering it frame by frame closes seams at a bounded speed (the seam ramp).
+    pub fn set_seam_length_cap(&mut self, cap: f64) {
+        self.seam_length_cap = cap.max(0.0);
     }
 
     /// Potential energy of the constraints at `positions` (gravity excluded), J.
@@ -365,7 +373,7 @@ impl Solver {
 
     fn inputs(&self) -> ProjectionInputs<'_> {
         ProjectionInputs {
-            seam_opening: self.seam_opening,
+            seam_length_cap: self.seam_length_cap,
             attachment_targets: &self.attachment_targets,
         }
     }
@@ -615,7 +623,7 @@ impl Solver {
             *p = x + h * v;
         }
         let inputs = ProjectionInputs {
-            seam_opening: self.seam_opening,
+            seam_length_cap: self.seam_length_cap,
             attachment_targets: &self.attachment_targets,
         };
         let constraints = &self.constraints;

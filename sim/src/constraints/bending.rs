@@ -135,7 +135,7 @@ mod tests {
             })
             .collect();
         let inputs = super::super::ProjectionInputs {
-            seam_opening: 1.0,
+            seam_length_cap: f64::INFINITY,
             attachment_targets: &[],
         };
         let energy = c.energy(&bent, &inputs);

@@ -25,7 +25,7 @@ pub(crate) enum Kind {
     Stretch { rest_length: f64 },
     /// Laplacian bending: the current Laplacian rescaled to the rest Laplacian's norm.
     Bend { rest: Vec3 },
-    /// Seam: zero rest length, scaled by the seam's opening factor (1 = no pull, 0 = closed).
+    /// Seam: the gap capped at the seam length cap (0 = closed).
     Seam,
     /// Attachment to a moving target point (index into the attachment targets).
     Attach { target: usize },
@@ -44,8 +44,8 @@ pub struct Constraints {
 /// What the projections need besides the positions.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ProjectionInputs<'a> {
-    /// How open seams still are: 1 = rest (no pull), 0 = fully closed.
-    pub seam_opening: f64,
+    /// Longest gap a seam keeps, m (infinite = no pull, 0 = closed).
+    pub seam_length_cap: f64,
     /// Current target of each attachment.
     pub attachment_targets: &'a [Vec3],
 }
@@ -145,7 +145,7 @@ impl Constraints {
         match self.kind[t] {
             Kind::Stretch { rest_length } => stretch::project(ax, rest_length),
             Kind::Bend { rest } => bending::project(ax, rest),
-            Kind::Seam => seams::project(ax, inputs.seam_opening),
+            Kind::Seam => seams::project(ax, inputs.seam_length_cap),
             Kind::Attach { target } => attachments::project(inputs.attachment_targets[target]),
         }
     }

@@ -1,7 +1,7 @@
-//! Seams: zero-rest-length springs between vertex pairs that sew panels together. The pull is
-//! ramped without touching the factorized matrix: the projection keeps a fraction `opening`
-//! of the current gap, so the effective stiffness is w (1 - opening), from 0 (opening 1) to
-//! the full w (opening 0).
+//! Seams: springs between vertex pairs that sew panels together. Their pull is ramped without
+//! touching the factorized matrix: the projection caps the gap at a length (the same for all
+//! seams, lowered frame by frame to 0), so a seam is slack while its gap is under the cap and
+//! closes no faster than the cap shrinks. With the cap at 0 a seam is a zero-length spring.
 
 use serde::{Deserialize, Serialize};
 
@@ -26,8 +26,13 @@ pub(super) fn add(c: &mut Constraints, seams: &[Seam]) {
 }
 
 #[inline]
-pub(super) fn project(gap: Vec3, opening: f64) -> Vec3 {
-    gap * opening.clamp(0.0, 1.0)
+pub(super) fn project(gap: Vec3, cap: f64) -> Vec3 {
+    let length = gap.norm();
+    if length > cap.max(0.0) {
+        gap * (cap.max(0.0) / length)
+    } else {
+        gap
+    }
 }
 
 #[cfg(test)]
@@ -35,10 +40,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn opening_scales_the_kept_gap() {
-        let gap = Vec3::new(0.1, -0.2, 0.3);
+    fn the_cap_limits_the_kept_gap() {
+        let gap = Vec3::new(0.0, 0.3, 0.4);
+        assert_eq!(project(gap, f64::INFINITY), gap);
         assert_eq!(project(gap, 1.0), gap);
         assert_eq!(project(gap, 0.0), Vec3::zeros());
-        assert!((project(gap, 0.25) - gap * 0.25).norm() < 1e-15);
+        assert!((project(gap, 0.25) - gap * 0.5).norm() < 1e-15);
     }
 }

@@ -53,7 +53,7 @@ mod tests {
         let x = [Vec3::zeros(), Vec3::new(2.0, 0.0, 0.0)];
         let ax = c.apply(0, &x);
         let inputs = super::super::ProjectionInputs {
-            seam_opening: 1.0,
+            seam_length_cap: f64::INFINITY,
             attachment_targets: &[],
         };
         assert!((c.project(0, ax, &inputs).norm() - 0.5).abs() < 1e-15);
