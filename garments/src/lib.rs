@@ -12,6 +12,7 @@
 mod builtin;
 mod check;
 mod error;
+pub mod library;
 mod mesh;
 mod obj;
 pub mod pattern;
