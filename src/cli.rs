@@ -39,6 +39,57 @@ pub enum Command {
         #[command(subcommand)]
         command: MotionsCommand,
     },
+    /// Garment templates: the design library, sewing patterns (GarmentCode JSON) sewn and
+    /// draped into templates, and mesh checks.
+    Garments {
+        #[command(subcommand)]
+        command: GarmentsCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+pub enum GarmentsCommand {
+    /// List the library's designs: name, split, vertices at the default resolution, what it is.
+    List {
+        /// Also write the list as a JSON array (`name`, `split`, `vertices`, ...).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Describe one design: parameters, panels, stitches, mesh size.
+    Show {
+        /// Design name (see `garments list`).
+        name: String,
+        /// Write its sewing pattern (GarmentCode specification JSON) here.
+        #[arg(long)]
+        pattern_out: Option<PathBuf>,
+    },
+    /// Sew and drape a design or a GarmentCode pattern into a template on the default body.
+    /// Exits non-zero when a quality gate fails (the template and report are still written).
+    Make {
+        /// Design name or `*_specification.json` file.
+        source: String,
+        /// Template output: .obj (with UVs and panel groups) or .ply.
+        #[arg(long)]
+        out: PathBuf,
+        /// Write the gates, counts and timings to this JSON file.
+        #[arg(long)]
+        report: Option<PathBuf>,
+        /// Target triangle edge length, m.
+        #[arg(long, default_value_t = garments::pattern::DEFAULT_EDGE_LENGTH_M)]
+        edge_length: f64,
+    },
+    /// Check a garment mesh (OBJ) or sewing pattern (JSON) and print what is wrong and what
+    /// would be repaired; exits non-zero when it cannot be used.
+    Check {
+        /// OBJ mesh or GarmentCode specification JSON.
+        file: PathBuf,
+        /// Scale positions by this factor first (0.01 for a mesh in cm).
+        #[arg(long, default_value_t = 1.0)]
+        scale: f64,
+        /// Also write the findings to this JSON file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
 }
 
 #[derive(Debug, Args)]
@@ -59,8 +110,9 @@ pub struct DemoArgs {
 /// The garment-on-body sequence to simulate.
 #[derive(Debug, Args)]
 pub struct SceneArgs {
-    /// Garment: a built-in name (`default` = `skirt`) or a template OBJ with UVs, aligned to
-    /// the default body in its canonical A-pose.
+    /// Garment: a library design (see `garments list`; its template is made once and cached),
+    /// the built-in skirt (`skirt`, `default`), or a template OBJ with UVs aligned to the
+    /// default body in its canonical A-pose.
     #[arg(long, default_value = "default")]
     pub garment: String,
     /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an

@@ -103,12 +103,17 @@ pub fn material(text: &str) -> Result<sim::Material> {
     Ok(m)
 }
 
-/// A garment template and its body attachments: an OBJ file with UVs (no attachments), or a
-/// built-in garment fitted to `model` and draped ([`sim::scene::builtin_template`]).
+/// A garment template and its body attachments: a library design (sewn on `model` once and
+/// cached, see [`library_template`]), the built-in skirt fitted to `model` and draped
+/// ([`sim::scene::builtin_template`]), or an OBJ file with UVs (checked and repaired, no
+/// attachments).
 pub fn garment(
     source: &str,
     model: &BodyModel,
 ) -> Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
+    if let Some(design) = garments::library::find(source) {
+        return Ok((library_template(design, model)?, Vec::new()));
+    }
     let path = Path::new(source);
     if source.ends_with(".obj") || path.exists() {
         let raw = garments::read_obj(path)?;
@@ -116,6 +121,81 @@ pub fn garment(
             garments::repair(&raw, 1.0).with_context(|| format!("garment file {source}"))?;
         return Ok((template, Vec::new()));
     }
+    if !garments::BUILTIN.contains(&source) {
+        bail!(
+            "unknown garment '{source}': not a library design ({}), a built-in ({}) or a file",
+            garments::library::design_names().join(", "),
+            garments::BUILTIN.join(", ")
+        );
+    }
     sim::scene::builtin_template(model, source, &garments::SkirtParams::default())
         .with_context(|| format!("preparing built-in garment '{source}'"))
+}
+
+/// Where made templates are cached: `$DIT_GARMENT_CACHE`, else `$XDG_CACHE_HOME/dit-garment`,
+/// else `~/.cache/dit-garment`.
+pub fn cache_dir() -> std::path::PathBuf {
+    if let Some(dir) = std::env::var_os("DIT_GARMENT_CACHE") {
+        return dir.into();
+    }
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .map(std::path::PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))
+        .unwrap_or_else(|| ".cache".into());
+    base.join("dit-garment")
+}
+
+/// A library design's template on `model`, made (sewn and draped, about 5-20 s) on first use
+/// and cached under [`cache_dir`], keyed by the pattern, the body and the software version.
+/// Refused when the design fails a quality gate.
+pub fn library_template(
+    design: &garments::library::Design,
+    model: &BodyModel,
+) -> Result<garments::Garment> {
+    use std::hash::{Hash, Hasher};
+    let pattern = design.pattern()?;
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    pattern.to_json().hash(&mut hasher);
+    env!("CARGO_PKG_VERSION").hash(&mut hasher);
+    model.name().hash(&mut hasher);
+    for v in model.template() {
+        v.map(f64::to_bits).hash(&mut hasher);
+    }
+    let path = cache_dir().join(format!("{}-{:016x}.obj", design.name, hasher.finish()));
+    if path.exists() {
+        let mut cached = garments::read_obj(&path)?;
+        cached.name = design.name.to_string();
+        cached.validate()?;
+        return Ok(cached);
+    }
+    eprintln!(
+        "making the template of '{}' (first use; cached in {})",
+        design.name,
+        path.display()
+    );
+    let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+    let (template, report) =
+        sim::sewing::sew(model, &mesh, &sim::sewing::SewingOptions::default())?;
+    if !report.gates_passed {
+        bail!(
+            "the template of '{}' failed its quality gates: {}",
+            design.name,
+            report.failed.join("; ")
+        );
+    }
+    write_template(&path, &template)?;
+    Ok(template)
+}
+
+/// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically.
+pub fn write_template(path: &Path, template: &garments::Garment) -> Result<()> {
+    let ply = path.extension().is_some_and(|e| e == "ply");
+    crate::output::write_atomic(path, |w| {
+        if ply {
+            garments::write_ply(w, template)?;
+        } else {
+            garments::write_obj(w, template, None)?;
+        }
+        Ok(())
+    })
 }

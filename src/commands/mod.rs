@@ -4,6 +4,7 @@ mod body;
 mod compare;
 mod demo;
 mod drape_bench;
+mod garments_cmd;
 mod motions_cmd;
 mod regress;
 mod simulate;
@@ -22,6 +23,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Regress(args) => regress::run(&args),
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
+        Command::Garments { command } => garments_cmd::run(command),
     }
 }
 

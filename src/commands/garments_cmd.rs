@@ -1,0 +1,249 @@
+//! `garments list | show | make | check`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use garments::Pattern;
+use garments::library::{DESIGNS, find};
+use motions::BodyModel;
+use serde::Serialize;
+
+use crate::cli::GarmentsCommand;
+
+/// println! that reports a closed pipe as an error instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        writeln!(std::io::stdout().lock(), $($arg)*)?;
+    }};
+}
+use crate::inputs;
+use crate::output::{write_atomic, write_json};
+
+/// One row of `garments list --json`.
+#[derive(Debug, Serialize)]
+struct DesignRow {
+    name: &'static str,
+    split: &'static str,
+    vertices: usize,
+    triangles: usize,
+    panels: usize,
+    description: &'static str,
+}
+
+/// What `garments make --report` writes.
+#[derive(Debug, Serialize)]
+struct MakeReport {
+    name: String,
+    #[serde(flatten)]
+    sewing: sim::sewing::SewingReport,
+    /// Self-intersections are counted once self-contact exists (issue 8); null until then.
+    self_intersections: Option<usize>,
+    edge_length_m: f64,
+    mesh_s: f64,
+    wall_s: f64,
+}
+
+/// Runs a `garments` subcommand.
+pub fn run(command: GarmentsCommand) -> Result<()> {
+    match command {
+        GarmentsCommand::List { json } => list(json.as_deref()),
+        GarmentsCommand::Show { name, pattern_out } => show(&name, pattern_out.as_deref()),
+        GarmentsCommand::Make {
+            source,
+            out,
+            report,
+            edge_length,
+        } => make(&source, &out, report.as_deref(), edge_length),
+        GarmentsCommand::Check { file, scale, json } => check(&file, scale, json.as_deref()),
+    }
+}
+
+fn unknown(name: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "unknown design '{name}' (designs: {})",
+        garments::library::design_names().join(", ")
+    )
+}
+
+fn list(json: Option<&Path>) -> Result<()> {
+    let mut rows = Vec::new();
+    say!("{:<24} {:<6} {:>8} {:>6}  description", "name", "split", "vertices", "panels");
+    for d in DESIGNS {
+        let mesh = d.pattern()?.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+        let merged = mesh.merged(&mesh.garment.positions)?;
+        let row = DesignRow {
+            name: d.name,
+            split: d.split,
+            vertices: merged.positions.len(),
+            triangles: merged.triangles.len(),
+            panels: merged.panels.len(),
+            description: d.description,
+        };
+        say!(
+            "{:<24} {:<6} {:>8} {:>6}  {}",
+            row.name, row.split, row.vertices, row.panels, row.description
+        );
+        rows.push(row);
+    }
+    if let Some(path) = json {
+        write_json(path, &rows)?;
+    }
+    Ok(())
+}
+
+fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
+    let design = find(name).ok_or_else(|| unknown(name))?;
+    let pattern = design.pattern()?;
+    say!("{}: {} ({} split)", design.name, design.description, design.split);
+    say!(
+        "parameters (cm): {}",
+        serde_json::to_string(&design.params).unwrap_or_default()
+    );
+    for panel in &pattern.panels {
+        say!(
+            "  panel {:<16} {} corners, {} edges",
+            panel.name,
+            panel.vertices.len(),
+            panel.edges.len()
+        );
+    }
+    let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+    let merged = mesh.merged(&mesh.garment.positions)?;
+    say!(
+        "  {} stitches; template {} vertices, {} triangles at {} m edges",
+        pattern.stitches.len(),
+        merged.positions.len(),
+        merged.triangles.len(),
+        garments::pattern::DEFAULT_EDGE_LENGTH_M
+    );
+    if let Some(path) = pattern_out {
+        write_atomic(path, |w| {
+            use std::io::Write;
+            writeln!(w, "{}", pattern.to_json())?;
+            Ok(())
+        })?;
+        say!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// A design or a pattern file.
+pub fn load_pattern(source: &str) -> Result<Pattern> {
+    if let Some(d) = find(source) {
+        return Ok(d.pattern()?);
+    }
+    let path = Path::new(source);
+    if path.extension().is_some_and(|e| e == "json") || path.exists() {
+        return Ok(Pattern::read(path)?);
+    }
+    Err(unknown(source))
+}
+
+fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Result<()> {
+    let started = Instant::now();
+    let pattern = load_pattern(source)?;
+    let model = BodyModel::default_body();
+    let mesh = pattern
+        .mesh(edge_length)
+        .with_context(|| format!("meshing '{}'", pattern.name))?;
+    let mesh_s = started.elapsed().as_secs_f64();
+    eprintln!(
+        "{}: {} panels, {} vertices before sewing; sewing and draping ...",
+        pattern.name,
+        mesh.garment.panels.len(),
+        mesh.garment.positions.len()
+    );
+    let (template, sewing) =
+        sim::sewing::sew(&model, &mesh, &sim::sewing::SewingOptions::default())
+            .with_context(|| format!("sewing '{}'", pattern.name))?;
+    inputs::write_template(out, &template)?;
+    let made = MakeReport {
+        name: pattern.name.clone(),
+        sewing,
+        self_intersections: None,
+        edge_length_m: edge_length,
+        mesh_s,
+        wall_s: started.elapsed().as_secs_f64(),
+    };
+    say!(
+        "{}: {} vertices, {} triangles; inside {}, seam gap {:.2} mm, moving {:.1}%, max stretch \
+         {:.3}; {:.1} s -> {}",
+        made.name,
+        made.sewing.vertices,
+        made.sewing.triangles,
+        made.sewing.verts_inside,
+        1e3 * made.sewing.max_seam_gap_m,
+        100.0 * made.sewing.moving_fraction,
+        made.sewing.max_edge_stretch,
+        made.wall_s,
+        out.display()
+    );
+    if let Some(path) = report {
+        write_json(path, &made)?;
+    }
+    if !made.sewing.gates_passed {
+        bail!("quality gates failed: {}", made.sewing.failed.join("; "));
+    }
+    say!("gates passed");
+    Ok(())
+}
+
+#[derive(Debug, Serialize)]
+struct CheckOutput {
+    file: String,
+    usable: bool,
+    vertices: usize,
+    triangles: usize,
+    panels: usize,
+    extent_m: [f64; 3],
+    findings: Vec<String>,
+}
+
+fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
+    let shown = file.display().to_string();
+    if file.extension().is_some_and(|e| e == "json") {
+        let pattern = Pattern::read(file)?;
+        let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+        say!(
+            "{shown}: a valid sewing pattern: {} panels, {} stitches, {} vertices at {} m edges",
+            pattern.panels.len(),
+            pattern.stitches.len(),
+            mesh.garment.positions.len(),
+            garments::pattern::DEFAULT_EDGE_LENGTH_M
+        );
+        return Ok(());
+    }
+    let mut raw = garments::read_obj(file)?;
+    for p in &mut raw.positions {
+        *p = p.map(|c| c * scale);
+    }
+    let report = garments::check(&raw);
+    let out = CheckOutput {
+        file: shown.clone(),
+        usable: report.repairable(),
+        vertices: report.vertices,
+        triangles: report.triangles,
+        panels: report.panels,
+        extent_m: report.extent_m,
+        findings: report.lines(),
+    };
+    say!(
+        "{shown}: {} vertices, {} triangles, {} panels, extent {:.3} x {:.3} x {:.3} m",
+        out.vertices, out.triangles, out.panels, out.extent_m[0], out.extent_m[1], out.extent_m[2]
+    );
+    if out.findings.is_empty() {
+        say!("  no problems found");
+    }
+    for line in &out.findings {
+        say!("  {line}");
+    }
+    if let Some(path) = json {
+        write_json(path, &out)?;
+    }
+    if !out.usable {
+        bail!("{shown}: cannot be used as a garment template (see the findings above)");
+    }
+    Ok(())
+}
