@@ -495,3 +495,93 @@ fn regress_writes_the_checked_json() {
         }
     }
 }
+
+#[test]
+fn garments_list_make_and_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let list = dir.path().join("list.json");
+    ok(&["garments", "list", "--json", list.to_str().unwrap()]);
+    let rows: Value = serde_json::from_str(&std::fs::read_to_string(&list).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert!(rows.len() >= 16);
+    assert!(
+        rows.iter()
+            .all(|r| r["name"].is_string() && r["vertices"].as_u64().unwrap() > 1000)
+    );
+    assert!(rows.iter().filter(|r| r["split"] == "test").count() >= 3);
+
+    // The smallest design is sewn and draped on the default body with every gate passed.
+    let out = dir.path().join("tank.obj");
+    let report = dir.path().join("tank.json");
+    ok(&[
+        "garments",
+        "make",
+        "tank_tight",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    for key in [
+        "gates_passed",
+        "vertices",
+        "triangles",
+        "verts_inside",
+        "max_seam_gap_m",
+        "moving_fraction",
+        "self_intersections",
+        "wall_s",
+    ] {
+        assert!(r.get(key).is_some(), "report lacks {key}: {r}");
+    }
+    assert_eq!(r["gates_passed"], true, "{r}");
+    assert!(r["verts_inside"].as_u64().unwrap() <= 35);
+    assert!(r["max_seam_gap_m"].as_f64().unwrap() < 0.002);
+    let checked = ok(&["garments", "check", out.to_str().unwrap()]);
+    assert!(checked.contains("no problems found"), "{checked}");
+
+    // A mesh in centimetres is refused without --scale and accepted with it.
+    let cm = dir.path().join("cm.obj");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let scaled: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(rest) => {
+                let c: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                format!("v {} {} {}\n", c[0] * 100.0, c[1] * 100.0, c[2] * 100.0)
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(&cm, scaled).unwrap();
+    let e = fails(&["garments", "check", cm.to_str().unwrap()]);
+    assert!(e.contains("cannot be used"), "{e}");
+    ok(&["garments", "check", cm.to_str().unwrap(), "--scale", "0.01"]);
+
+    // Broken patterns and unknown names fail with the reason, and nothing is written.
+    let bad = dir.path().join("bad_specification.json");
+    std::fs::write(
+        &bad,
+        "{\"pattern\": {\"panels\": {}}, \"properties\": {\"units_in_meter\": 100}}",
+    )
+    .unwrap();
+    let never = dir.path().join("never.obj");
+    let e = fails(&[
+        "garments",
+        "make",
+        bad.to_str().unwrap(),
+        "--out",
+        never.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("bad_specification.json") && e.contains("panels is empty"),
+        "{e}"
+    );
+    assert!(!never.exists());
+    let e = fails(&["garments", "show", "poncho"]);
+    assert!(e.contains("unknown design"), "{e}");
+}

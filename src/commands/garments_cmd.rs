@@ -69,9 +69,17 @@ fn unknown(name: &str) -> anyhow::Error {
 
 fn list(json: Option<&Path>) -> Result<()> {
     let mut rows = Vec::new();
-    say!("{:<24} {:<6} {:>8} {:>6}  description", "name", "split", "vertices", "panels");
+    say!(
+        "{:<24} {:<6} {:>8} {:>6}  description",
+        "name",
+        "split",
+        "vertices",
+        "panels"
+    );
     for d in DESIGNS {
-        let mesh = d.pattern()?.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+        let mesh = d
+            .pattern()?
+            .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
         let merged = mesh.merged(&mesh.garment.positions)?;
         let row = DesignRow {
             name: d.name,
@@ -83,7 +91,11 @@ fn list(json: Option<&Path>) -> Result<()> {
         };
         say!(
             "{:<24} {:<6} {:>8} {:>6}  {}",
-            row.name, row.split, row.vertices, row.panels, row.description
+            row.name,
+            row.split,
+            row.vertices,
+            row.panels,
+            row.description
         );
         rows.push(row);
     }
@@ -96,7 +108,12 @@ fn list(json: Option<&Path>) -> Result<()> {
 fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
     let design = find(name).ok_or_else(|| unknown(name))?;
     let pattern = design.pattern()?;
-    say!("{}: {} ({} split)", design.name, design.description, design.split);
+    say!(
+        "{}: {} ({} split)",
+        design.name,
+        design.description,
+        design.split
+    );
     say!(
         "parameters (cm): {}",
         serde_json::to_string(&design.params).unwrap_or_default()
@@ -231,7 +248,12 @@ fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
     };
     say!(
         "{shown}: {} vertices, {} triangles, {} panels, extent {:.3} x {:.3} x {:.3} m",
-        out.vertices, out.triangles, out.panels, out.extent_m[0], out.extent_m[1], out.extent_m[2]
+        out.vertices,
+        out.triangles,
+        out.panels,
+        out.extent_m[0],
+        out.extent_m[1],
+        out.extent_m[2]
     );
     if out.findings.is_empty() {
         say!("  no problems found");
