@@ -234,13 +234,7 @@ mod tests {
         // Every triangle's normal points away from the axis.
         for tri in &g.triangles {
             let [a, b, c] = tri.map(|v| g.positions[v as usize]);
-            let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                e1[1] * e2[2] - e1[2] * e2[1],
-                e1[2] * e2[0] - e1[0] * e2[2],
-                e1[0] * e2[1] - e1[1] * e2[0],
-            ];
+            let n = crate::check::doubled_normal(a, b, c);
             let mid = [(a[0] + b[0] + c[0]) / 3.0, (a[2] + b[2] + c[2]) / 3.0];
             assert!(
                 n[0] * mid[0] + n[2] * mid[1] > 0.0,

@@ -333,15 +333,20 @@ fn add(
     }
 }
 
-fn area(g: &Garment, t: [u32; 3]) -> f64 {
-    let [a, b, c] = t.map(|v| g.positions[v as usize]);
+/// (b - a) x (c - a): the triangle's normal scaled by twice its area.
+pub(crate) fn doubled_normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
     let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    let n = [
+    [
         e1[1] * e2[2] - e1[2] * e2[1],
         e1[2] * e2[0] - e1[0] * e2[2],
         e1[0] * e2[1] - e1[1] * e2[0],
-    ];
+    ]
+}
+
+fn area(g: &Garment, t: [u32; 3]) -> f64 {
+    let [a, b, c] = t.map(|v| g.positions[v as usize]);
+    let n = doubled_normal(a, b, c);
     0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
 }
 
@@ -492,10 +497,7 @@ pub(crate) fn outward_score(
         .iter()
         .map(|&t| {
             let [a, b, c] = triangles[t].map(|v| positions[v as usize]);
-            let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let nx = e1[1] * e2[2] - e1[2] * e2[1];
-            let nz = e1[0] * e2[1] - e1[1] * e2[0];
+            let [nx, _, nz] = doubled_normal(a, b, c);
             let mx = (a[0] + b[0] + c[0]) / 3.0 - centre[0];
             let mz = (a[2] + b[2] + c[2]) / 3.0 - centre[1];
             nx * mx + nz * mz

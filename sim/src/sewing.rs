@@ -119,14 +119,19 @@ pub struct SewingReport {
     pub failed: Vec<String>,
 }
 
-/// Front-back centre of a body's torso: the mid-depth of the central strip (|x| < 10 cm) at
-/// 60-80% of the height, averaged. `vertices` y up, facing +z.
-pub fn torso_centre_z(vertices: &[[f64; 3]]) -> f64 {
-    let (lo, hi) = vertices
+/// Lowest and highest y of a vertex set.
+fn height_range(vertices: &[[f64; 3]]) -> (f64, f64) {
+    vertices
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
             (l.min(v[1]), h.max(v[1]))
-        });
+        })
+}
+
+/// Front-back centre of a body's torso: the mid-depth of the central strip (|x| < 10 cm) at
+/// 60-80% of the height, averaged. `vertices` y up, facing +z.
+pub fn torso_centre_z(vertices: &[[f64; 3]]) -> f64 {
+    let (lo, hi) = height_range(vertices);
     let mut sum = 0.0;
     let mut count = 0;
     for k in 0..5 {
@@ -148,11 +153,7 @@ pub fn torso_centre_z(vertices: &[[f64; 3]]) -> f64 {
 /// Half-widths of a body's legs and hips at 5%, 10%, ..., 60% of its height (see
 /// [`PATTERN_BODY_HALF_WIDTHS`]).
 pub fn half_widths(vertices: &[[f64; 3]]) -> [f64; 12] {
-    let (lo, hi) = vertices
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(v[1]), h.max(v[1]))
-        });
+    let (lo, hi) = height_range(vertices);
     std::array::from_fn(|k| {
         let y = lo + 0.05 * (k + 1) as f64 * (hi - lo);
         vertices
@@ -182,11 +183,7 @@ fn grades(body: &[[f64; 3]]) -> [f64; 12] {
 /// difference of the torso centres, and below the hips x widens where `body` is wider
 /// ([`grades`]: the pattern is graded, so its rest shape changes too).
 pub fn fit_to_body(positions: &[[f64; 3]], body: &[[f64; 3]]) -> Vec<[f64; 3]> {
-    let (feet, top) = body
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(v[1]), h.max(v[1]))
-        });
+    let (feet, top) = height_range(body);
     let scale = (top - feet) / PATTERN_BODY_HEIGHT_M;
     let dz = torso_centre_z(body) - PATTERN_BODY_TORSO_Z_M;
     let grade = grades(body);
