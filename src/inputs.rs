@@ -146,7 +146,8 @@ pub fn cache_dir() -> std::path::PathBuf {
 }
 
 /// A library design's template on `model`, made (sewn and draped, about 5-20 s) on first use
-/// and cached under [`cache_dir`], keyed by the pattern, the body and the software version.
+/// and cached under [`cache_dir`], keyed by the pattern, the body, the sewing options and the
+/// software version.
 /// Refused when the design fails a quality gate.
 pub fn library_template(
     design: &garments::library::Design,
@@ -154,10 +155,12 @@ pub fn library_template(
 ) -> Result<garments::Garment> {
     use std::hash::{Hash, Hasher};
     let pattern = design.pattern()?;
+    let options = sim::sewing::SewingOptions::default();
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     pattern.to_json().hash(&mut hasher);
     env!("CARGO_PKG_VERSION").hash(&mut hasher);
     model.name().hash(&mut hasher);
+    format!("{options:?}").hash(&mut hasher);
     for v in model.template() {
         v.map(f64::to_bits).hash(&mut hasher);
     }
@@ -174,8 +177,7 @@ pub fn library_template(
         path.display()
     );
     let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
-    let (template, report) =
-        sim::sewing::sew(model, &mesh, &sim::sewing::SewingOptions::default())?;
+    let (template, report) = sim::sewing::sew(model, &mesh, &options)?;
     if !report.gates_passed {
         bail!(
             "the template of '{}' failed its quality gates: {}",

@@ -4,7 +4,8 @@
 //! Every design has a front and a back torso panel (the back's outline runs clockwise, as
 //! GarmentCode's do, so stitches join end to start) and, when it has sleeves, a front and a
 //! back panel per sleeve, rotated like GarmentCode's for an A-pose with the arms 40 degrees
-//! down. Measurements are in cm on GarmentCode's average body (feet at y = 0, facing +z):
+//! down and placed, as GarmentCode places its sleeves, a little out along the arm from the
+//! torso's armhole (so the arm runs inside the sleeve before the seams close). Measurements are in cm on GarmentCode's average body (feet at y = 0, facing +z):
 //! `sim::sewing` fits them to our body.
 
 use serde_json::{Value, json};
@@ -170,7 +171,7 @@ pub const DESIGNS: [Design; 19] = [
         name: "tshirt_oversized",
         description: "oversized t-shirt, dropped armholes",
         split: "train",
-        params: top(90.0, 32.0, 32.0, 5.0, 20.0, 24.0, 19.0),
+        params: top(90.0, 32.0, 32.0, 3.0, 20.0, 24.0, 19.0),
     },
     Design {
         name: "tshirt_cropped",
@@ -248,7 +249,7 @@ pub const DESIGNS: [Design; 19] = [
         name: "dress_tshirt",
         description: "t-shirt dress, above the knee",
         split: "train",
-        params: top(62.0, 28.0, 33.0, 0.0, 17.5, 20.0, 16.0),
+        params: top(62.0, 28.0, 31.0, 0.0, 17.5, 20.0, 16.0),
     },
     Design {
         name: "dress_longsleeve_midi",
@@ -293,6 +294,8 @@ const SLEEVE_FRONT_Z: f64 = 17.5;
 const SLEEVE_BACK_Z: f64 = -12.5;
 /// Sleeve rotation about z for the arm 40 degrees down (GarmentCode's), degrees.
 const SLEEVE_ANGLE: f64 = 50.483;
+/// How far out along the arm the sleeve's armhole starts from the torso's, cm.
+const SLEEVE_OFFSET: f64 = 7.0;
 
 /// Point to edge coordinates (GarmentCode's `abs_to_rel_2d`).
 fn relative(start: [f64; 2], end: [f64; 2], p: [f64; 2]) -> [f64; 2] {
@@ -488,13 +491,20 @@ impl Design {
             ];
             let angle = -side * SLEEVE_ANGLE;
             let (sin, cos) = angle.to_radians().sin_cos();
-            // Translation puts the armhole top on the shoulder point.
-            let rotated = [
-                cos * pts[1][0] - sin * pts[1][1],
-                sin * pts[1][0] + cos * pts[1][1],
+            // Translation puts the middle of the sleeve's armhole a little out along the arm
+            // from the middle of the torso's armhole, as GarmentCode places its sleeves
+            // (shirt_mean: 7 cm): the arm then runs inside the sleeve from the start.
+            let rotate = |q: [f64; 2]| [cos * q[0] - sin * q[1], sin * q[0] + cos * q[1]];
+            let sleeve_mid = rotate([-side * (top + bottom) / 2.0, -width / 2.0]);
+            let torso_mid = [
+                side * (armpit[0] + shoulder[0]) / 2.0,
+                (armpit[1] + shoulder[1]) / 2.0 + p.hem_height,
             ];
-            let shoulder_abs = [side * shoulder[0], shoulder[1] + p.hem_height];
-            let t = [shoulder_abs[0] - rotated[0], shoulder_abs[1] - rotated[1]];
+            let along = rotate([side * SLEEVE_OFFSET, 0.0]);
+            let t = [
+                torso_mid[0] + along[0] - sleeve_mid[0],
+                torso_mid[1] + along[1] - sleeve_mid[1],
+            ];
             let tag = if side > 0.0 { "left" } else { "right" };
             for (front, z) in [(true, SLEEVE_FRONT_Z), (false, SLEEVE_BACK_Z)] {
                 // Counter-clockwise order 0 1 2 3 for the +x front and the -x back.

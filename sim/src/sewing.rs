@@ -7,7 +7,7 @@
 //! 2. Close: seam springs whose gap cap is lowered linearly from the largest initial gap to 0
 //!    over `close_frames` (so no seam closes faster than that), gravity off, strong air
 //!    damping, the body colliding, until every stitched pair is within half the seam gate.
-//! 3. Settle: gravity on, damping 3/s, four substeps, until at most 1.5% of vertices moved
+//! 3. Settle: gravity on, damping 6/s, four substeps, until at most 1.5% of vertices moved
 //!    more than 1 cm/s on average over the last 10 frames (net displacement, so the contact
 //!    solver's frame-to-frame noise does not count), or the frame budget runs out.
 //! 4. Merge: stitched pairs become one vertex; the merged, draped mesh is the template.
@@ -84,8 +84,8 @@ impl Default for SewingOptions {
             close_frames: 30,
             max_close_frames: 90,
             min_settle_frames: 30,
-            max_settle_frames: 150,
-            settle_damping: 3.0,
+            max_settle_frames: 240,
+            settle_damping: 6.0,
         }
     }
 }

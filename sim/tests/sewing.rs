@@ -1,0 +1,56 @@
+//! Sewing patterns into templates on the default body, with GarmentCode's gates.
+//!
+//! The fast test sews one sleeved design (sleeves are the hard part: the arm must end up
+//! inside the sleeve). The whole library and the two shared GarmentCode examples are behind
+//! `--ignored` (about 4 minutes in release on 2 cores):
+//! `cargo test --release -p sim --test sewing -- --ignored`.
+
+use std::path::Path;
+
+use garments::library::{DESIGNS, find};
+use motions::BodyModel;
+use sim::sewing::{SewingOptions, SewingReport, sew};
+
+fn sew_pattern(pattern: &garments::Pattern) -> SewingReport {
+    let sewn = pattern.mesh(0.015).unwrap();
+    let (template, report) =
+        sew(&BodyModel::default_body(), &sewn, &SewingOptions::default()).unwrap();
+    assert_eq!(template.positions.len(), report.vertices);
+    let findings = garments::check(&template).lines();
+    assert!(findings.is_empty(), "{}: {findings:?}", pattern.name);
+    report
+}
+
+#[test]
+fn a_sleeved_design_drapes_with_every_gate_passed() {
+    let report = sew_pattern(&find("cap_sleeve_top").unwrap().pattern().unwrap());
+    assert!(report.gates_passed, "{report:?}");
+    assert!(report.max_edge_stretch < 1.3, "{report:?}");
+}
+
+#[test]
+#[ignore = "sews all 19 designs and both shared examples: minutes"]
+fn every_library_design_and_shared_example_drapes_with_every_gate_passed() {
+    let mut failed = Vec::new();
+    for design in DESIGNS {
+        let report = sew_pattern(&design.pattern().unwrap());
+        eprintln!("{}: {report:?}", design.name);
+        if !report.gates_passed {
+            failed.push((design.name.to_string(), report.failed));
+        }
+    }
+    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/garmentcode");
+    for name in ["shirt_mean", "dress_pencil"] {
+        let path = shared.join(format!("{name}_specification.json"));
+        if !path.exists() {
+            eprintln!("{} absent: skipped", path.display());
+            continue;
+        }
+        let report = sew_pattern(&garments::Pattern::read(&path).unwrap());
+        eprintln!("{name}: {report:?}");
+        if !report.gates_passed {
+            failed.push((name.to_string(), report.failed));
+        }
+    }
+    assert!(failed.is_empty(), "{failed:?}");
+}
