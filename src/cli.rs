@@ -31,6 +31,12 @@ pub enum Command {
     /// Score recording B against recording A (ground truth, same template) with the paper's
     /// metrics, every 5th frame.
     Compare(CompareArgs),
+    /// Draw a recording's frames as PNG pictures (garment on body, shaded, outlined), a
+    /// contact sheet of them, and optionally an animated GIF; no GPU or display needed.
+    Render(RenderArgs),
+    /// Write one self-contained HTML page (WebGL, no network) that plays one or two recordings
+    /// side by side, synchronized, with an orbit camera.
+    View(ViewArgs),
     /// Pose a body (default body or an SMPL .npz model) and write it as OBJ in the model's
     /// vertex order.
     Body(BodyArgs),
@@ -233,6 +239,84 @@ pub struct CompareArgs {
     /// Seed of the surface samples.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+/// What the garment is coloured by in `render`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ColourBy {
+    /// Largest stretch of the vertex's edges against the template (length / rest length).
+    Stretch,
+    /// Depth inside the body, mm.
+    Penetration,
+    /// Distance to the same vertex in the `--against` recording, cm.
+    Error,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Recording to draw (.mcap from `simulate` or `demo`).
+    pub recording: PathBuf,
+    /// Frames to draw, comma-separated (default: six evenly spaced frames).
+    #[arg(long, value_delimiter = ',')]
+    pub frames: Vec<usize>,
+    /// Output folder for `frame_<k>_<view>.png`, `contact_sheet.png` and `sequence.gif`.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Cameras, comma-separated: front, side, three-quarter.
+    #[arg(long, value_delimiter = ',', default_value = "three-quarter")]
+    pub views: Vec<String>,
+    /// Picture width and height, pixels.
+    #[arg(long, default_value_t = 512)]
+    pub size: u32,
+    /// Anti-aliasing: samples per pixel along each axis (1 = off).
+    #[arg(long, default_value_t = 2)]
+    pub ssaa: u32,
+    /// Colour the garment by a per-vertex quantity, with a colour bar.
+    #[arg(long, alias = "colour-by", value_enum)]
+    pub color_by: Option<ColourBy>,
+    /// Reference recording for `--color-by error` (same garment template).
+    #[arg(long)]
+    pub against: Option<PathBuf>,
+    /// Colour bar range as `min,max` (defaults: stretch 0.9,1.2; penetration 0,10 mm; error
+    /// 0,5 cm).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub range: Vec<f32>,
+    /// Leave the body out.
+    #[arg(long)]
+    pub no_body: bool,
+    /// Also write `sequence.gif`: the whole sequence from the first view.
+    #[arg(long)]
+    pub gif: bool,
+    /// GIF: every K-th frame.
+    #[arg(long, default_value_t = 2)]
+    pub gif_every: usize,
+    /// GIF picture size, pixels.
+    #[arg(long, default_value_t = 320)]
+    pub gif_size: u32,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Write `images` (PNG paths, frames first), `pixels_garment` (garment pixels in the first
+    /// image), `sheet`, `gif` and timings here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// One or two recordings (two play side by side, synchronized).
+    #[arg(required = true, num_args = 1..=2)]
+    pub recordings: Vec<PathBuf>,
+    /// Output HTML file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Leave the body out (smaller file).
+    #[arg(long)]
+    pub no_body: bool,
+    /// Keep every K-th frame (smaller file for long sequences).
+    #[arg(long, default_value_t = 1)]
+    pub every: usize,
+    #[command(flatten)]
+    pub model: ModelArgs,
 }
 
 /// Where the body comes from and its shape.

@@ -201,3 +201,53 @@ pub fn write_template(path: &Path, template: &garments::Garment) -> Result<()> {
         Ok(())
     })
 }
+
+/// The body of recording frame `k`: the recorded vertices if the recording has them, else the
+/// model posed with the frame's recorded pose, translation and shape. Checks the triangles
+/// (recorded, else the model's) against the vertex count, so a wrong `--model` is named.
+pub fn recorded_body(
+    model: &BodyModel,
+    recording: &sim::recording::Recording,
+    k: usize,
+    name: &Path,
+) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+    let vertices = if let Some(v) = recording.body.get(k) {
+        v.iter().map(|p| p.map(|c| c as f64)).collect()
+    } else {
+        let pose = recording
+            .poses
+            .get(k)
+            .with_context(|| format!("{}: frame {k} has no body pose", name.display()))?;
+        let shaped = model.shape(&pose.betas)?;
+        let mut p = [0.0; 72];
+        if pose.pose.len() != 72 {
+            bail!(
+                "{}: frame {k} has {} pose values, not 72",
+                name.display(),
+                pose.pose.len()
+            );
+        }
+        p.copy_from_slice(&pose.pose);
+        let frame = motions::FramePose {
+            pose: p,
+            transl: pose.transl,
+        };
+        model.pose(&shaped, &frame)?.vertices
+    };
+    let faces = if recording.body_faces.is_empty() {
+        model.faces().to_vec()
+    } else {
+        recording.body_faces.clone()
+    };
+    if faces
+        .iter()
+        .flatten()
+        .any(|&i| i as usize >= vertices.len())
+    {
+        bail!(
+            "{}: the body model does not match the recording's body (pass the right --model)",
+            name.display()
+        );
+    }
+    Ok((vertices, faces))
+}

@@ -1,8 +1,7 @@
 //! `dit-garment compare A.mcap B.mcap`: B scored against A (ground truth) with the paper's
 //! metrics (sim::metrics), every 5th frame, averaged; a table, per frame on request, and JSON.
 
-use anyhow::{Context, Result, bail};
-use motions::FramePose;
+use anyhow::{Result, bail};
 use serde_json::json;
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores};
 use sim::recording::Recording;
@@ -59,34 +58,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         |f: &[[f32; 3]]| -> Vec<[f64; 3]> { f.iter().map(|p| p.map(|c| c as f64)).collect() };
     let mut per_frame = Vec::new();
     for k in (0..frames).step_by(FRAME_STRIDE) {
-        let body: Vec<[f64; 3]> = if let Some(v) = a.body.get(k) {
-            to64(v)
-        } else {
-            let pose = a
-                .poses
-                .get(k)
-                .with_context(|| format!("{}: frame {k} has no body pose", args.a.display()))?;
-            let shaped = model.shape(&pose.betas)?;
-            let mut p = [0.0; 72];
-            p.copy_from_slice(&pose.pose);
-            model
-                .pose(
-                    &shaped,
-                    &FramePose {
-                        pose: p,
-                        transl: pose.transl,
-                    },
-                )?
-                .vertices
-        };
-        let faces: Vec<[u32; 3]> = if a.body_faces.is_empty() {
-            model.faces().to_vec()
-        } else {
-            a.body_faces.clone()
-        };
-        if faces.iter().flatten().any(|&i| i as usize >= body.len()) {
-            bail!("the body model does not match the recording's body (pass the right --model)");
-        }
+        let (body, faces) = inputs::recorded_body(&model, &a, k, &args.a)?;
         let surface = BodySurface {
             vertices: &body,
             triangles: &faces,

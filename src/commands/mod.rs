@@ -7,6 +7,7 @@ mod drape_bench;
 mod garments_cmd;
 mod motions_cmd;
 mod regress;
+mod render;
 mod simulate;
 
 use anyhow::Result;
@@ -21,6 +22,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::DrapeBench(args) => drape_bench::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Regress(args) => regress::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::View(args) => render::view(&args),
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
         Command::Garments { command } => garments_cmd::run(command),
