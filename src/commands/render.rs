@@ -200,6 +200,15 @@ fn frame_bounds(f: &FrameMeshes) -> Option<Bounds> {
     Bounds::of(f.garment.iter().chain(&f.body))
 }
 
+/// Where the camera looks: the vertices' mean across, the middle of their height up, so a
+/// swinging arm does not shake a sequence's pictures.
+fn steady_centre(frame: &FrameMeshes, bounds: &Bounds) -> P3 {
+    let points = frame.body.iter().chain(&frame.garment);
+    let n = (frame.body.len() + frame.garment.len()).max(1) as f32;
+    let (x, z) = points.fold((0.0, 0.0), |(x, z), p| (x + p[0], z + p[2]));
+    [x / n, bounds.center()[1], z / n]
+}
+
 /// Draws one frame from one view; the garment is layer 0 (so `coverage(0)` counts it).
 fn picture(
     renderer: &mut Renderer,
@@ -209,7 +218,7 @@ fn picture(
     size: &Bounds,
     colours: Option<(&[f32], ColourScale, &str)>,
 ) -> RgbImage {
-    let bounds = frame_bounds(frame).map_or(*size, |b| size.recentred(b.center()));
+    let bounds = frame_bounds(frame).map_or(*size, |b| size.recentred(steady_centre(frame, &b)));
     let camera = Camera::framing(view, &bounds, renderer.aspect());
     let mut layers = vec![Layer {
         positions: &frame.garment,
