@@ -163,6 +163,10 @@ pub struct SimulateArgs {
     /// Also record the body vertices of every frame (large).
     #[arg(long)]
     pub body_vertices: bool,
+    /// Also record a `foxglove.SceneUpdate` channel (`/foxglove/scene`: garment and body
+    /// triangle lists, z up) so the sequence plays in Foxglove's 3D panel (large).
+    #[arg(long)]
+    pub foxglove: bool,
     /// Write every frame's garment (and body) as OBJ into this folder.
     #[arg(long)]
     pub obj_dir: Option<PathBuf>,

@@ -202,6 +202,14 @@ pub fn write_template(path: &Path, template: &garments::Garment) -> Result<()> {
     })
 }
 
+/// A body of one recorded frame.
+pub struct RecordedBody {
+    /// Vertex positions, m.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles.
+    pub faces: Vec<[u32; 3]>,
+}
+
 /// The body of recording frame `k`: the recorded vertices if the recording has them, else the
 /// model posed with the frame's recorded pose, translation and shape. Checks the triangles
 /// (recorded, else the model's) against the vertex count, so a wrong `--model` is named.
@@ -210,7 +218,7 @@ pub fn recorded_body(
     recording: &sim::recording::Recording,
     k: usize,
     name: &Path,
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+) -> Result<RecordedBody> {
     let vertices = if let Some(v) = recording.body.get(k) {
         v.iter().map(|p| p.map(|c| c as f64)).collect()
     } else {
@@ -249,5 +257,5 @@ pub fn recorded_body(
             name.display()
         );
     }
-    Ok((vertices, faces))
+    Ok(RecordedBody { vertices, faces })
 }

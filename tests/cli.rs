@@ -75,6 +75,14 @@ fn demo_writes_a_readable_sequence_and_summary() {
     assert_eq!(recording.meta.unwrap().material.k_s_n_per_m, 100.0);
     assert!(out.join("frames/garment_0004.obj").exists());
     assert!(out.join("frames/body_0004.obj").exists());
+    for preview in [
+        "pictures/contact_sheet.png",
+        "pictures/sequence.gif",
+        "view.html",
+    ] {
+        assert!(out.join(preview).exists(), "demo did not write {preview}");
+    }
+    assert_eq!(summary["viewer"], out.join("view.html").to_str().unwrap());
     assert!(
         std::fs::read_dir(&out).unwrap().all(|e| !e
             .unwrap()

@@ -146,6 +146,80 @@ fn render_writes_pictures_a_sheet_a_gif_and_the_checked_json() {
 }
 
 #[test]
+fn simulate_foxglove_adds_a_scene_update_channel() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fox.mcap");
+    ok(&[
+        "simulate",
+        "--frames",
+        "3",
+        "--blend-frames",
+        "2",
+        "--settle-frames",
+        "0",
+        "--foxglove",
+        "--out",
+        path.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let bytes = std::fs::read(&path).unwrap();
+    let recording = sim::recording::Recording::read(&path).unwrap();
+    let (v, f) = (
+        recording.template.positions.len(),
+        recording.template.triangles.len(),
+    );
+    let mut scenes = 0;
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = message.unwrap();
+        if m.channel.topic != "/foxglove/scene" {
+            continue;
+        }
+        let schema = m.channel.schema.as_ref().expect("a schema");
+        assert_eq!(schema.name, "foxglove.SceneUpdate");
+        assert_eq!(schema.encoding, "jsonschema");
+        assert_eq!(m.channel.message_encoding, "json");
+        let scene: Value = serde_json::from_slice(&m.data).unwrap();
+        let entities = scene["entities"].as_array().unwrap();
+        assert_eq!(entities.len(), 2, "garment and body");
+        let garment = &entities[0]["triangles"][0];
+        assert_eq!(garment["points"].as_array().unwrap().len(), v);
+        assert_eq!(garment["indices"].as_array().unwrap().len(), 3 * f);
+        let body = &entities[1]["triangles"][0];
+        let n = body["points"].as_array().unwrap().len();
+        assert!(
+            body["indices"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|i| i.as_u64().unwrap() < n as u64)
+        );
+        assert_eq!(entities[0]["timestamp"]["sec"], 0);
+        scenes += 1;
+    }
+    assert_eq!(scenes, 3, "one scene per frame");
+    // Off by default.
+    let plain = dir.path().join("plain.mcap");
+    ok(&[
+        "simulate",
+        "--frames",
+        "2",
+        "--blend-frames",
+        "1",
+        "--settle-frames",
+        "0",
+        "--out",
+        plain.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let bytes = std::fs::read(&plain).unwrap();
+    assert!(
+        mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .all(|m| m.unwrap().channel.topic != "/foxglove/scene")
+    );
+}
+
+#[test]
 fn render_and_view_refuse_bad_recordings_and_settings() {
     let dir = tempfile::tempdir().unwrap();
     let seq = recording(dir.path(), "a.mcap", "k_s=100");

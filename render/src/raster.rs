@@ -150,7 +150,7 @@ impl Renderer {
                 continue;
             }
             let area = edge(a, b, c);
-            if !(area.abs() > 1e-12) {
+            if area.is_nan() || area.abs() <= 1e-12 {
                 continue;
             }
             let inv_area = 1.0 / area;

@@ -131,7 +131,7 @@ fn encode_track(track: &Track, colour: [u8; 3], payload: &mut Vec<u8>) -> Result
             }
         }
     }
-    while payload.len() % 4 != 0 {
+    while !payload.len().is_multiple_of(4) {
         payload.push(0);
     }
     Ok(json!({

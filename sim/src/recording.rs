@@ -35,6 +35,8 @@ pub const BODY_VERTICES_TOPIC: &str = "/body/vertices";
 pub const BODY_FACES_TOPIC: &str = "/body/faces";
 /// Solver statistics per frame (JSON).
 pub const STATS_TOPIC: &str = "/sim/stats";
+/// Optional 3D scene for Foxglove's 3D panel (`foxglove.SceneUpdate`, JSON), z up.
+pub const FOXGLOVE_SCENE_TOPIC: &str = "/foxglove/scene";
 
 /// Material with its units spelled out in the keys.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -120,6 +122,34 @@ pub struct PoseRecord {
 
 const META_SCHEMA: &str = r#"{"title": "dit_garment.SequenceMeta", "type": "object", "description": "see docs/FORMATS.md"}"#;
 const POSE_SCHEMA: &str = r#"{"title": "dit_garment.GarmentBodyPose", "type": "object", "properties": {"frame": {"type": "integer"}, "time_s": {"type": "number"}, "pose": {"type": "array", "minItems": 72, "maxItems": 72}, "transl": {"type": "array", "minItems": 3, "maxItems": 3}, "betas": {"type": "array"}}}"#;
+/// Foxglove's `foxglove.SceneUpdate` message, the parts this project writes (triangle lists);
+/// Foxglove recognizes the schema by its name.
+const FOXGLOVE_SCENE_SCHEMA: &str = r#"{
+  "title": "foxglove.SceneUpdate",
+  "description": "An update to the entities displayed in a 3D scene",
+  "type": "object",
+  "properties": {
+    "deletions": {"type": "array", "items": {"type": "object"}},
+    "entities": {"type": "array", "items": {"type": "object", "properties": {
+      "timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
+      "frame_id": {"type": "string"},
+      "id": {"type": "string"},
+      "lifetime": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}},
+      "frame_locked": {"type": "boolean"},
+      "metadata": {"type": "array"},
+      "arrows": {"type": "array"}, "cubes": {"type": "array"}, "spheres": {"type": "array"},
+      "cylinders": {"type": "array"}, "lines": {"type": "array"}, "texts": {"type": "array"},
+      "models": {"type": "array"},
+      "triangles": {"type": "array", "items": {"type": "object", "properties": {
+        "pose": {"type": "object"},
+        "points": {"type": "array", "items": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}}},
+        "color": {"type": "object", "properties": {"r": {"type": "number"}, "g": {"type": "number"}, "b": {"type": "number"}, "a": {"type": "number"}}},
+        "colors": {"type": "array"},
+        "indices": {"type": "array", "items": {"type": "integer", "minimum": 0}}
+      }}}
+    }}}
+  }
+}"#;
 const STATS_SCHEMA: &str = r#"{"title": "dit_garment.FrameStats", "type": "object", "description": "see docs/FORMATS.md"}"#;
 
 fn raw(dtype: &str, shape: String) -> BTreeMap<String, String> {
@@ -156,6 +186,45 @@ pub struct RecordingWriter<W: Write + Seek> {
     pose: u16,
     stats: u16,
     body: Option<u16>,
+    foxglove: Option<FoxgloveScene>,
+}
+
+/// The Foxglove scene channel and the triangles its messages repeat.
+struct FoxgloveScene {
+    channel: u16,
+    garment_triangles: Vec<[u32; 3]>,
+    body_faces: Vec<[u32; 3]>,
+}
+
+/// One `foxglove.TriangleListPrimitive` entity: y-up points turned z-up by the pose (+90
+/// degrees about x), rounded to 0.1 mm to keep the JSON short.
+fn foxglove_entity(
+    id: &str,
+    time_ns: u64,
+    points: impl Iterator<Item = [f64; 3]>,
+    triangles: &[[u32; 3]],
+    rgb: [f64; 3],
+) -> serde_json::Value {
+    let round = |v: f64| (v * 1e4).round() / 1e4;
+    let points: Vec<serde_json::Value> = points
+        .map(|p| serde_json::json!({"x": round(p[0]), "y": round(p[1]), "z": round(p[2])}))
+        .collect();
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    serde_json::json!({
+        "timestamp": {"sec": time_ns / 1_000_000_000, "nsec": time_ns % 1_000_000_000},
+        "frame_id": "world", "id": id,
+        "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
+        "arrows": [], "cubes": [], "spheres": [], "cylinders": [], "lines": [], "texts": [],
+        "models": [],
+        "triangles": [{
+            "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                     "orientation": {"x": half, "y": 0.0, "z": 0.0, "w": half}},
+            "points": points,
+            "color": {"r": rgb[0], "g": rgb[1], "b": rgb[2], "a": 1.0},
+            "colors": [],
+            "indices": triangles.iter().flatten().collect::<Vec<_>>(),
+        }],
+    })
 }
 
 impl<W: Write + Seek> RecordingWriter<W> {
@@ -335,7 +404,36 @@ impl<W: Write + Seek> RecordingWriter<W> {
             pose,
             stats,
             body,
+            foxglove: None,
         })
+    }
+
+    /// Adds a `foxglove.SceneUpdate` channel (garment and, with `body_faces`, body as triangle
+    /// lists every frame) so Foxglove's 3D panel plays the sequence. Large: every frame repeats
+    /// the triangles.
+    pub fn with_foxglove_scene(
+        mut self,
+        garment_triangles: &[[u32; 3]],
+        body_faces: Option<&[[u32; 3]]>,
+    ) -> Result<Self> {
+        let schema = self
+            .writer
+            .add_schema(
+                "foxglove.SceneUpdate",
+                "jsonschema",
+                FOXGLOVE_SCENE_SCHEMA.as_bytes(),
+            )
+            .map_err(mcap_error)?;
+        let channel = self
+            .writer
+            .add_channel(schema, FOXGLOVE_SCENE_TOPIC, "json", &BTreeMap::new())
+            .map_err(mcap_error)?;
+        self.foxglove = Some(FoxgloveScene {
+            channel,
+            garment_triangles: garment_triangles.to_vec(),
+            body_faces: body_faces.map(<[_]>::to_vec).unwrap_or_default(),
+        });
+        Ok(self)
     }
 
     /// Appends one frame.
@@ -375,6 +473,31 @@ impl<W: Write + Seek> RecordingWriter<W> {
             let bytes = f32_bytes(frame.body.vertices.iter().flatten().copied());
             self.writer
                 .write_to_known_channel(&header(channel), &bytes)
+                .map_err(mcap_error)?;
+        }
+        if let Some(scene) = &self.foxglove {
+            let mut entities = vec![foxglove_entity(
+                "garment",
+                time_ns,
+                frame.garment.iter().map(|p| [p.x, p.y, p.z]),
+                &scene.garment_triangles,
+                [0.24, 0.43, 0.8],
+            )];
+            if !scene.body_faces.is_empty() {
+                entities.push(foxglove_entity(
+                    "body",
+                    time_ns,
+                    frame.body.vertices.iter().copied(),
+                    &scene.body_faces,
+                    [0.81, 0.71, 0.65],
+                ));
+            }
+            let message = serde_json::json!({"deletions": [], "entities": entities});
+            self.writer
+                .write_to_known_channel(
+                    &header(scene.channel),
+                    &serde_json::to_vec(&message).map_err(mcap_error)?,
+                )
                 .map_err(mcap_error)?;
         }
         Ok(())

@@ -58,10 +58,10 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         |f: &[[f32; 3]]| -> Vec<[f64; 3]> { f.iter().map(|p| p.map(|c| c as f64)).collect() };
     let mut per_frame = Vec::new();
     for k in (0..frames).step_by(FRAME_STRIDE) {
-        let (body, faces) = inputs::recorded_body(&model, &a, k, &args.a)?;
+        let body = inputs::recorded_body(&model, &a, k, &args.a)?;
         let surface = BodySurface {
-            vertices: &body,
-            triangles: &faces,
+            vertices: &body.vertices,
+            triangles: &body.faces,
         };
         let s = scorer.frame(
             &to64(&b.garment[k]),

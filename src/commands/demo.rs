@@ -1,14 +1,18 @@
 //! `dit-garment demo`: the main job on built-in defaults. The default garment (a skirt fitted
 //! and draped on the default body) rides the default body through the built-in `walk` motion
 //! (blend-in from the canonical A-pose and settle frames included); the sequence is written as
-//! MCAP, every K-th frame as OBJ (garment and body), and a JSON summary.
+//! MCAP, every K-th frame as OBJ (garment and body), pictures (a contact sheet of six frames
+//! and a GIF of the whole sequence), the HTML viewer, and a JSON summary.
 
 use anyhow::Result;
+use render::View;
+use serde_json::json;
 
 use crate::cli::DemoArgs;
 use crate::output::write_json;
 
-use super::simulate::{prepare, record, summary_json};
+use super::render::{RenderJob, render_recording, write_view};
+use super::simulate::{RecordOptions, prepare, record, summary_json};
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out)?;
@@ -16,8 +20,33 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let sequence = args.out.join("sequence.mcap");
     let frames_dir = args.out.join("frames");
     let obj = (args.obj_every > 0).then_some((frames_dir.as_path(), args.obj_every));
-    let s = record(&prepared, &sequence, false, obj, false)?;
+    let options = RecordOptions {
+        obj,
+        ..RecordOptions::default()
+    };
+    let s = record(&prepared, &sequence, options)?;
+    let job = RenderJob {
+        frames: &[],
+        views: &[View::ThreeQuarter],
+        size: 512,
+        ssaa: 2,
+        colour_by: None,
+        gif: Some((2, 320)),
+    };
+    let pictures = args.out.join("pictures");
+    let rendered = render_recording(&sequence, &prepared.model, true, &job, &pictures)?;
+    let viewer = args.out.join("view.html");
+    write_view(
+        std::slice::from_ref(&sequence),
+        &prepared.model,
+        true,
+        1,
+        &viewer,
+    )?;
     let mut summary = summary_json(&s, &sequence);
+    summary["contact_sheet"] = json!(rendered.sheet);
+    summary["gif"] = json!(rendered.gif);
+    summary["viewer"] = json!(viewer);
     summary["garment"] = prepared.garment.name.clone().into();
     summary["motion"] = prepared.scene.motion.name.clone().into();
     summary["blend_frames"] = prepared.scene.blend.blend_frames.into();
@@ -44,6 +73,15 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         s.max_edge_stretch,
         sequence.display(),
         frames_dir.display()
+    );
+    println!(
+        "  pictures: {} and {}; viewer: {} (open it in a browser)",
+        rendered.sheet.display(),
+        rendered
+            .gif
+            .as_ref()
+            .map_or(String::new(), |g| g.display().to_string()),
+        viewer.display()
     );
     Ok(())
 }

@@ -46,7 +46,7 @@ impl<'a> Sequence<'a> {
             bail!("{}: the recording has no garment frames", path.display());
         }
         let body_faces = if with_body {
-            inputs::recorded_body(model, &recording, 0, path)?.1
+            inputs::recorded_body(model, &recording, 0, path)?.faces
         } else {
             Vec::new()
         };
@@ -65,7 +65,7 @@ impl<'a> Sequence<'a> {
 
     fn meshes(&self, k: usize) -> Result<FrameMeshes> {
         let body = if self.with_body {
-            to_f32(&inputs::recorded_body(self.model, &self.recording, k, self.path)?.0)
+            to_f32(&inputs::recorded_body(self.model, &self.recording, k, self.path)?.vertices)
         } else {
             Vec::new()
         };
@@ -80,7 +80,7 @@ impl<'a> Sequence<'a> {
 enum Colouring {
     Stretch { edges: Vec<(usize, usize, f32)> },
     Penetration,
-    Error { reference: Recording },
+    Error { reference: Box<Recording> },
 }
 
 impl Colouring {
@@ -124,7 +124,9 @@ impl Colouring {
                         seq.recording.template.positions.len()
                     );
                 }
-                Colouring::Error { reference }
+                Colouring::Error {
+                    reference: Box::new(reference),
+                }
             }
         })
     }

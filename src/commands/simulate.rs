@@ -57,14 +57,27 @@ pub fn prepare(args: &SceneArgs) -> Result<Prepared> {
     })
 }
 
-/// Runs a prepared scene into `out` (atomically), optionally with OBJ frames.
-pub fn record(
-    p: &Prepared,
-    out: &Path,
-    body_vertices: bool,
-    obj: Option<(&Path, usize)>,
-    quiet: bool,
-) -> Result<RunSummary> {
+/// What a recording carries besides the garment, and how the run shows itself.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RecordOptions<'a> {
+    /// Record the body vertices of every frame.
+    pub body_vertices: bool,
+    /// Record a `foxglove.SceneUpdate` channel.
+    pub foxglove: bool,
+    /// Write OBJ frames into this folder, every K-th frame.
+    pub obj: Option<(&'a Path, usize)>,
+    /// Hide the progress bar.
+    pub quiet: bool,
+}
+
+/// Runs a prepared scene into `out` (atomically).
+pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSummary> {
+    let RecordOptions {
+        body_vertices,
+        foxglove,
+        obj,
+        quiet,
+    } = options;
     let frames = p.scene.num_frames();
     let meta = SequenceMeta {
         software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
@@ -101,6 +114,9 @@ pub fn record(
     write_atomic(out, |w| {
         let faces = body_vertices.then(|| p.model.faces());
         let mut rec = RecordingWriter::new(w, &meta, &template, faces)?;
+        if foxglove {
+            rec = rec.with_foxglove_scene(&template.triangles, Some(p.model.faces()))?;
+        }
         let s = p.scene.run(&p.model, |frame| {
             rec.write_frame(frame, FPS)?;
             if let Some((dir, every)) = obj
@@ -156,7 +172,13 @@ pub fn summary_json(s: &RunSummary, out: &Path) -> serde_json::Value {
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let prepared = prepare(&args.scene)?;
     let obj = args.obj_dir.as_deref().map(|d| (d, args.obj_every));
-    let s = record(&prepared, &args.out, args.body_vertices, obj, args.quiet)
+    let options = RecordOptions {
+        body_vertices: args.body_vertices,
+        foxglove: args.foxglove,
+        obj,
+        quiet: args.quiet,
+    };
+    let s = record(&prepared, &args.out, options)
         .with_context(|| format!("simulating into {}", args.out.display()))?;
     let summary = summary_json(&s, &args.out);
     if let Some(path) = &args.json {
