@@ -193,9 +193,10 @@ impl Renderer {
     /// Colours every covered sample from its interpolated normal (two-sided Lambert, a key
     /// light above-left of the camera and a weak headlight).
     fn shade(&mut self, camera: &Camera, layers: &[Layer]) {
+        // A raking key light (from the upper left, half round to the side) makes folds read.
         let key = normalize(add(
-            add(scale(camera.forward, -0.75), scale(camera.up, 0.55)),
-            scale(camera.right, -0.4),
+            add(scale(camera.forward, -0.55), scale(camera.up, 0.5)),
+            scale(camera.right, -0.65),
         ));
         let towards = scale(camera.forward, -1.0);
         let sh = self.height * self.ssaa;
@@ -226,7 +227,7 @@ impl Renderer {
                 }
                 self.normal[i] = n;
                 let light =
-                    back * (0.2 + 0.62 * dot(n, key).max(0.0) + 0.28 * dot(n, towards).max(0.0));
+                    back * (0.18 + 0.7 * dot(n, key).max(0.0) + 0.22 * dot(n, towards).max(0.0));
                 let base = match layer.values {
                     Some((values, scale)) => {
                         let v: f32 = tri
