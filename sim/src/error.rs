@@ -47,4 +47,12 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// A dataset spec is unreadable or invalid.
+    #[error("dataset spec {path}: {message}")]
+    Spec {
+        /// The file.
+        path: String,
+        /// What is wrong (naming the key).
+        message: String,
+    },
 }

@@ -11,6 +11,7 @@
 mod cloth;
 pub mod constraints;
 mod contact;
+pub mod dataset;
 pub mod drape_bench;
 mod error;
 pub mod metrics;

@@ -3,6 +3,8 @@
 
 use std::io::Write;
 use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -16,19 +18,32 @@ use crate::cli::{SceneArgs, SimulateArgs};
 use crate::inputs;
 use crate::output::{write_atomic, write_json};
 
-/// A scene from the flags, with its model and template.
+/// A scene from the flags, with its model and template (shared between the sequences of a
+/// dataset run).
 pub struct Prepared {
-    pub model: BodyModel,
-    pub garment: garments::Garment,
+    pub model: Arc<BodyModel>,
+    pub garment: Arc<garments::Garment>,
     pub scene: Scene,
 }
 
 pub fn prepare(args: &SceneArgs) -> Result<Prepared> {
-    let model = inputs::body_model(args.model.model.as_deref())?;
+    let model = Arc::new(inputs::body_model(args.model.model.as_deref())?);
     let material = inputs::material(&args.material)?;
+    let (garment, attachments) = inputs::garment(&args.garment, &model)?;
+    prepare_with(model, Arc::new(garment), attachments, material, args)
+}
+
+/// A scene on a loaded model and template; `args` gives the motion, shape and settings (its
+/// garment, model and material fields are not read).
+pub fn prepare_with(
+    model: Arc<BodyModel>,
+    garment: Arc<garments::Garment>,
+    attachments: Vec<sim::scene::BodyAttachment>,
+    material: sim::Material,
+    args: &SceneArgs,
+) -> Result<Prepared> {
     let shaped = model.shape(&args.betas)?;
     let motion = inputs::motion(&args.motion, &model, &shaped)?;
-    let (garment, attachments) = inputs::garment(&args.garment, &model)?;
     let params = SolverParams {
         substeps: args.substeps,
         max_iterations: args.iterations,
@@ -57,6 +72,9 @@ pub fn prepare(args: &SceneArgs) -> Result<Prepared> {
     })
 }
 
+/// Start of the error message of a run stopped by its deadline.
+pub const TIMED_OUT: &str = "time limit reached";
+
 /// What a recording carries besides the garment, and how the run shows itself.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RecordOptions<'a> {
@@ -68,6 +86,10 @@ pub struct RecordOptions<'a> {
     pub obj: Option<(&'a Path, usize)>,
     /// Hide the progress bar.
     pub quiet: bool,
+    /// The sequence's seed, recorded in its metadata.
+    pub seed: Option<u64>,
+    /// Give up (with an error saying so) when the run is still going at this moment.
+    pub deadline: Option<Instant>,
 }
 
 /// Runs a prepared scene into `out` (atomically).
@@ -77,6 +99,8 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
         foxglove,
         obj,
         quiet,
+        seed,
+        deadline,
     } = options;
     let frames = p.scene.num_frames();
     let meta = SequenceMeta {
@@ -91,7 +115,7 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
         settle_frames: p.scene.blend.settle_frames,
         material: p.scene.material.into(),
         friction: p.scene.friction,
-        seed: None,
+        seed,
         solver: p.scene.params,
         units: "metres, seconds, radians, kg; y up, body facing +z".into(),
     };
@@ -118,6 +142,12 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
             rec = rec.with_foxglove_scene(&template.triangles, Some(p.model.faces()))?;
         }
         let s = p.scene.run(&p.model, |frame| {
+            if deadline.is_some_and(|d| Instant::now() > d) {
+                return Err(sim::Error::Recording {
+                    path: out.display().to_string(),
+                    message: format!("{TIMED_OUT} at frame {}", frame.index),
+                });
+            }
             rec.write_frame(frame, FPS)?;
             if let Some((dir, every)) = obj
                 && frame.index % every.max(1) == 0
@@ -177,6 +207,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         foxglove: args.foxglove,
         obj,
         quiet: args.quiet,
+        ..RecordOptions::default()
     };
     let s = record(&prepared, &args.out, options)
         .with_context(|| format!("simulating into {}", args.out.display()))?;

@@ -1,0 +1,216 @@
+//! What a dataset records per sequence (one manifest line), the quality gates, and the
+//! statistics over a manifest.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+
+use super::plan::SPLITS;
+use super::spec::GateSpec;
+use crate::SolverParams;
+use crate::recording::MaterialRecord;
+use crate::scene::RunSummary;
+
+/// Gate results of one attempt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GateResult {
+    /// Every value finite.
+    pub finite: bool,
+    /// Deepest vertex inside the body over all frames, m.
+    pub max_penetration_m: f64,
+    /// Most vertices inside the body in one frame.
+    pub max_verts_inside: usize,
+    /// Largest edge stretch.
+    pub max_edge_stretch: f64,
+    /// The attempt ran past the time limit.
+    pub timed_out: bool,
+    /// Whether every gate passed.
+    pub passed: bool,
+    /// The gates that failed, with measured value and limit.
+    pub failed: Vec<String>,
+}
+
+impl GateResult {
+    /// Judges a finished run against the gates.
+    pub fn judge(summary: &RunSummary, gates: &GateSpec) -> GateResult {
+        let mut failed = Vec::new();
+        if !summary.finite {
+            failed.push("non-finite values".to_string());
+        }
+        if summary.max_penetration_m > gates.max_penetration_m {
+            failed.push(format!(
+                "penetration {:.1} mm > {:.1} mm",
+                summary.max_penetration_m * 1e3,
+                gates.max_penetration_m * 1e3
+            ));
+        }
+        let allowed = (gates.max_inside_fraction * summary.vertices as f64).floor() as usize;
+        if summary.max_verts_inside > allowed {
+            failed.push(format!(
+                "{} vertices inside the body > {allowed}",
+                summary.max_verts_inside
+            ));
+        }
+        if summary.max_edge_stretch > gates.max_edge_stretch {
+            failed.push(format!(
+                "edge stretch {:.3} > {:.3}",
+                summary.max_edge_stretch, gates.max_edge_stretch
+            ));
+        }
+        GateResult {
+            finite: summary.finite,
+            max_penetration_m: summary.max_penetration_m,
+            max_verts_inside: summary.max_verts_inside,
+            max_edge_stretch: summary.max_edge_stretch,
+            timed_out: false,
+            passed: failed.is_empty(),
+            failed,
+        }
+    }
+
+    /// An attempt that did not finish: it ran out of time or the solver failed.
+    pub fn unfinished(reason: String, timed_out: bool) -> GateResult {
+        GateResult {
+            finite: !reason.contains("finite"),
+            max_penetration_m: f64::NAN,
+            max_verts_inside: 0,
+            max_edge_stretch: f64::NAN,
+            timed_out,
+            passed: false,
+            failed: vec![reason],
+        }
+    }
+}
+
+/// One attempt at a sequence.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Attempt {
+    /// Solver settings used.
+    pub solver: SolverParams,
+    /// Gate results.
+    pub gates: GateResult,
+    /// Wall time, s.
+    pub wall_s: f64,
+}
+
+/// One manifest line: everything about a sequence and where it is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ManifestRecord {
+    /// Stable id.
+    pub id: String,
+    /// Split.
+    pub split: String,
+    /// Garment.
+    pub garment: String,
+    /// Motion source.
+    pub motion: String,
+    /// Shape coefficients.
+    pub betas: Vec<f64>,
+    /// Material, units in the keys.
+    pub material: MaterialRecord,
+    /// Friction coefficient.
+    pub friction: f64,
+    /// The sequence's seed.
+    pub seed: u64,
+    /// Output frames.
+    pub frames: usize,
+    /// Garment vertices.
+    pub vertices: usize,
+    /// `ok` (every gate passed) or `failed` (see `reason`; kept for inspection, not for
+    /// training).
+    pub status: String,
+    /// Why it failed (the last attempt's failed gates).
+    pub reason: Option<String>,
+    /// Every attempt, in order.
+    pub attempts: Vec<Attempt>,
+    /// Recording, relative to the dataset folder (none if no attempt finished).
+    pub file: Option<String>,
+    /// SHA-256 of the recording (hex).
+    pub sha256: Option<String>,
+    /// Size of the recording, bytes.
+    pub bytes: u64,
+    /// Software that made it.
+    pub software: String,
+    /// Wall time of all attempts, s.
+    pub wall_s: f64,
+}
+
+impl ManifestRecord {
+    /// Whether the sequence passed its gates.
+    pub fn ok(&self) -> bool {
+        self.status == "ok"
+    }
+}
+
+/// Counts, histograms and totals over manifest records (the `dataset stats` report).
+pub fn stats(records: &[ManifestRecord], fps: f64) -> Value {
+    let mut splits: BTreeMap<String, usize> = SPLITS.iter().map(|s| (s.to_string(), 0)).collect();
+    let mut garments: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut motions: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
+    let mut frames = 0;
+    let mut ok_frames = 0;
+    for r in records {
+        *splits.entry(r.split.clone()).or_default() += 1;
+        *garments.entry(&r.garment).or_default() += 1;
+        *motions.entry(&r.motion).or_default() += 1;
+        frames += r.frames;
+        if r.ok() {
+            ok_frames += r.frames;
+        } else {
+            let reason = r.reason.clone().unwrap_or_else(|| "unknown".into());
+            // Group by the gate, not its measured value.
+            let gate = reason
+                .split(|c: char| c.is_ascii_digit())
+                .next()
+                .unwrap_or("")
+                .trim()
+                .to_string();
+            *reasons
+                .entry(if gate.is_empty() { reason } else { gate })
+                .or_default() += 1;
+        }
+    }
+    let failed = records.iter().filter(|r| !r.ok()).count();
+    let retried = records.iter().filter(|r| r.attempts.len() > 1).count();
+    let histogram = |values: Vec<f64>, log: bool| -> Value {
+        let values: Vec<f64> = values
+            .into_iter()
+            .map(|v| if log { v.log10() } else { v })
+            .filter(|v| v.is_finite())
+            .collect();
+        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let bins = 10;
+        let mut counts = vec![0usize; bins];
+        if hi > lo {
+            for v in &values {
+                counts[(((v - lo) / (hi - lo) * bins as f64) as usize).min(bins - 1)] += 1;
+            }
+        } else if !values.is_empty() {
+            counts[0] = values.len();
+        }
+        json!({"min": lo, "max": hi, "log10": log, "counts": counts})
+    };
+    let wall: f64 = records.iter().map(|r| r.wall_s).sum();
+    json!({
+        "sequences": records.len(),
+        "failed": failed,
+        "retried": retried,
+        "frames": frames,
+        "frames_ok": ok_frames,
+        "hours": frames as f64 / fps / 3600.0,
+        "splits": splits,
+        "garments": garments,
+        "motions": motions,
+        "failures": reasons,
+        "material_histograms": {
+            "k_s_n_per_m": histogram(records.iter().map(|r| r.material.k_s_n_per_m).collect(), false),
+            "rho_kg_per_m2": histogram(records.iter().map(|r| r.material.rho_kg_per_m2).collect(), false),
+            "k_b_n_m": histogram(records.iter().map(|r| r.material.k_b_n_m).collect(), true),
+        },
+        "simulation_wall_s": wall,
+        "simulated_frames_per_s": if wall > 0.0 { frames as f64 / wall } else { 0.0 },
+    })
+}

@@ -1,0 +1,352 @@
+//! From a spec to the list of sequences: stable keys, ids and seeds, sampled shapes and
+//! materials, and the splits.
+//!
+//! Every random draw comes from a generator seeded by SHA-256 of the dataset seed and the
+//! draw's key, so a sequence is the same whichever shard, order or re-run produces it.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use super::spec::{DatasetSpec, MaterialRanges, Tag};
+use crate::recording::MaterialRecord;
+use crate::{Error, Result};
+
+/// One sequence to simulate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannedSequence {
+    /// Stable id (file name stem).
+    pub id: String,
+    /// The key its seeds derive from.
+    pub key: String,
+    /// `train`, `test`, `test_garment`, `test_motion`, `test_shape` or `test_material`.
+    pub split: String,
+    /// Garment (as named in the spec).
+    pub garment: String,
+    /// Motion source (built-in with parameters, or AMASS file).
+    pub motion: String,
+    /// Shape coefficients.
+    pub betas: Vec<f64>,
+    /// Material.
+    pub material: MaterialRecord,
+    /// Friction coefficient.
+    pub friction: f64,
+    /// The sequence's seed.
+    pub seed: u64,
+}
+
+/// The names every split can have, in manifest order.
+pub const SPLITS: [&str; 6] = [
+    "train",
+    "test",
+    "test_garment",
+    "test_motion",
+    "test_shape",
+    "test_material",
+];
+
+/// A 64-bit seed from the dataset seed and a key.
+pub fn derive_seed(dataset_seed: u64, key: &str) -> u64 {
+    let digest = Sha256::digest(format!("{dataset_seed}/{key}").as_bytes());
+    u64::from_le_bytes(digest[..8].try_into().expect("8 bytes"))
+}
+
+fn rng(dataset_seed: u64, key: &str) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(derive_seed(dataset_seed, key))
+}
+
+fn uniform(rng: &mut ChaCha8Rng, r: [f64; 2]) -> f64 {
+    if r[1] > r[0] {
+        rng.random_range(r[0]..r[1])
+    } else {
+        r[0]
+    }
+}
+
+fn material(rng: &mut ChaCha8Rng, m: &MaterialRanges) -> MaterialRecord {
+    MaterialRecord {
+        k_s_n_per_m: uniform(rng, m.k_s),
+        rho_kg_per_m2: uniform(rng, m.rho),
+        k_b_n_m: 10f64.powf(uniform(rng, m.log10_k_b)),
+    }
+}
+
+fn betas(rng: &mut ChaCha8Rng, n: usize, r: [f64; 2]) -> Vec<f64> {
+    (0..n).map(|_| uniform(rng, r)).collect()
+}
+
+/// A short, file-name-safe name for a motion or garment source.
+fn slug(source: &str) -> String {
+    let stem = std::path::Path::new(source.split(':').next().unwrap_or(source))
+        .file_stem()
+        .map_or(source.to_string(), |s| s.to_string_lossy().into_owned());
+    let s: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .take(32)
+        .collect();
+    if s.is_empty() { "x".into() } else { s }
+}
+
+/// The motions of a spec with their tags: variants expanded, globs expanded (sorted).
+pub fn expand_motions(spec: &DatasetSpec) -> Result<Vec<(String, Tag)>> {
+    let mut out = Vec::new();
+    for entry in &spec.motions {
+        let is_glob = entry.source.contains(['*', '?', '[']);
+        if is_glob {
+            let paths = glob::glob(&entry.source).map_err(|e| Error::Spec {
+                path: String::new(),
+                message: format!("motions: bad glob '{}': {e}", entry.source),
+            })?;
+            let mut files: Vec<String> = paths
+                .filter_map(|p| p.ok())
+                .map(|p| p.display().to_string())
+                .collect();
+            files.sort();
+            if files.is_empty() {
+                return Err(Error::Spec {
+                    path: String::new(),
+                    message: format!("motions: glob '{}' matches no file", entry.source),
+                });
+            }
+            out.extend(files.into_iter().map(|f| (f, entry.split)));
+        } else if entry.variants.is_empty() {
+            out.push((entry.source.clone(), entry.split));
+        } else {
+            for v in &entry.variants {
+                out.push((format!("{}:{v}", entry.source), entry.split));
+            }
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some((m, _)) = out.iter().find(|(m, _)| !seen.insert(m.clone())) {
+        return Err(Error::Spec {
+            path: String::new(),
+            message: format!("motions: '{m}' is listed twice"),
+        });
+    }
+    Ok(out)
+}
+
+/// Every sequence of the dataset, training first, then the test sets.
+pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Vec<PlannedSequence> {
+    let s = &spec.sequence;
+    let pick = |list: Vec<&String>, rng: &mut ChaCha8Rng| -> String {
+        list[rng.random_range(0..list.len())].clone()
+    };
+    let garments_tagged = |tag: Tag| -> Vec<&String> {
+        spec.garments
+            .iter()
+            .filter(|g| g.split == tag)
+            .map(|g| &g.name)
+            .collect()
+    };
+    let motions_tagged = |tag: Tag| -> Vec<&String> {
+        motions
+            .iter()
+            .filter(|m| m.1 == tag)
+            .map(|m| &m.0)
+            .collect()
+    };
+    let test_betas = spec.splits.test_betas_range.unwrap_or(s.betas_range);
+    let test_material = spec.splits.test_material_ranges.unwrap_or(spec.material);
+    let sequence = |split: &str, key: String, name: String, garment, motion, b, m| {
+        let seed = derive_seed(spec.seed, &key);
+        PlannedSequence {
+            id: format!("{split}-{name}-{:08x}", seed as u32),
+            key,
+            split: split.to_string(),
+            garment,
+            motion,
+            betas: b,
+            material: m,
+            friction: s.friction,
+            seed,
+        }
+    };
+    let mut out = Vec::new();
+    // Training: every training motion x shapes x draws (garment + material per draw).
+    for motion in motions_tagged(Tag::Train) {
+        for shape in 0..s.shapes_per_motion {
+            let shape_key = format!("train/{motion}/shape{shape}");
+            let b = betas(&mut rng(spec.seed, &shape_key), s.betas, s.betas_range);
+            for draw in 0..s.draws_per_shape {
+                let key = format!("{shape_key}/draw{draw}");
+                let mut r = rng(spec.seed, &key);
+                let garment = pick(garments_tagged(Tag::Train), &mut r);
+                let m = material(&mut r, &spec.material);
+                let name = format!("{}-s{shape}d{draw}", slug(motion));
+                out.push(sequence(
+                    "train",
+                    key,
+                    name,
+                    garment,
+                    motion.clone(),
+                    b.clone(),
+                    m,
+                ));
+            }
+        }
+    }
+    // Test sets: each draws its unseen factors from the held-out tags or ranges.
+    let sets = [
+        ("test", spec.splits.test, Tag::Test, Tag::Test, true, true),
+        (
+            "test_garment",
+            spec.splits.test_garment,
+            Tag::Test,
+            Tag::Train,
+            false,
+            false,
+        ),
+        (
+            "test_motion",
+            spec.splits.test_motion,
+            Tag::Train,
+            Tag::Test,
+            false,
+            false,
+        ),
+        (
+            "test_shape",
+            spec.splits.test_shape,
+            Tag::Train,
+            Tag::Train,
+            true,
+            false,
+        ),
+        (
+            "test_material",
+            spec.splits.test_material,
+            Tag::Train,
+            Tag::Train,
+            false,
+            true,
+        ),
+    ];
+    for (split, count, garment_tag, motion_tag, new_shape, new_material) in sets {
+        for i in 0..count {
+            let key = format!("{split}/{i}");
+            let mut r = rng(spec.seed, &key);
+            let garment = pick(garments_tagged(garment_tag), &mut r);
+            let motion = pick(motions_tagged(motion_tag), &mut r);
+            let b = betas(
+                &mut r,
+                s.betas,
+                if new_shape { test_betas } else { s.betas_range },
+            );
+            let m = material(
+                &mut r,
+                if new_material {
+                    &test_material
+                } else {
+                    &spec.material
+                },
+            );
+            let name = format!("{}-{i}", slug(&motion));
+            out.push(sequence(split, key, name, garment, motion, b, m));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::spec::{GarmentEntry, MotionEntry, SplitSpec};
+
+    fn spec() -> DatasetSpec {
+        let g = |name: &str, split| GarmentEntry {
+            name: name.into(),
+            split,
+        };
+        let m = |source: &str, split| MotionEntry {
+            source: source.into(),
+            variants: vec![],
+            split,
+        };
+        DatasetSpec {
+            name: "t".into(),
+            seed: 7,
+            sequence: Default::default(),
+            material: Default::default(),
+            solver: Default::default(),
+            gates: Default::default(),
+            garments: vec![g("a", Tag::Train), g("b", Tag::Train), g("c", Tag::Test)],
+            motions: vec![
+                m("walk", Tag::Train),
+                m("run", Tag::Train),
+                m("kick", Tag::Test),
+            ],
+            splits: SplitSpec {
+                test: 2,
+                test_garment: 1,
+                test_motion: 1,
+                test_shape: 1,
+                test_material: 1,
+                test_betas_range: Some([1.5, 2.0]),
+                test_material_ranges: None,
+            },
+        }
+    }
+
+    #[test]
+    fn plan_is_reproducible_and_splits_keep_unseen_factors_out_of_training() {
+        let spec = spec();
+        let motions = expand_motions(&spec).unwrap();
+        let a = plan(&spec, &motions);
+        assert_eq!(a, plan(&spec, &motions), "same spec, same plan");
+        assert_eq!(a.iter().filter(|p| p.split == "train").count(), 2 * 3 * 3);
+        assert_eq!(a.len(), 18 + 2 + 1 + 1 + 1 + 1);
+        let ids: std::collections::HashSet<_> = a.iter().map(|p| &p.id).collect();
+        assert_eq!(ids.len(), a.len(), "ids are unique");
+        for p in &a {
+            match p.split.as_str() {
+                "train" => assert!(p.garment != "c" && p.motion != "kick"),
+                "test" => assert!(p.garment == "c" && p.motion == "kick"),
+                "test_garment" => assert!(p.garment == "c" && p.motion != "kick"),
+                "test_motion" => assert!(p.garment != "c" && p.motion == "kick"),
+                "test_shape" => assert!(p.betas.iter().all(|b| *b >= 1.5)),
+                _ => {}
+            }
+            assert!((40.0..=200.0).contains(&p.material.k_s_n_per_m));
+            assert!((1e-8..=1e-4).contains(&p.material.k_b_n_m));
+            assert_eq!(p.betas.len(), 10);
+        }
+        // Draws of one shape share the betas; another seed changes everything.
+        assert_eq!(a[0].betas, a[1].betas);
+        assert_ne!(a[0].betas, a[3].betas);
+        let mut other = spec.clone();
+        other.seed = 8;
+        assert_ne!(plan(&other, &motions)[0].betas, a[0].betas);
+        // Adding a motion does not change the existing sequences.
+        let mut more = spec.clone();
+        more.motions.push(MotionEntry {
+            source: "squat".into(),
+            variants: vec![],
+            split: Tag::Train,
+        });
+        let b = plan(&more, &expand_motions(&more).unwrap());
+        for p in a.iter().filter(|p| p.split == "train") {
+            assert!(b.contains(p), "{} changed", p.id);
+        }
+    }
+
+    #[test]
+    fn variants_expand_and_duplicates_are_refused() {
+        let mut spec = spec();
+        spec.motions[0].variants = vec!["speed=0.8".into(), "speed=1.2".into()];
+        let m = expand_motions(&spec).unwrap();
+        assert_eq!(m[0].0, "walk:speed=0.8");
+        assert_eq!(m.len(), 4);
+        spec.motions.push(spec.motions[1].clone());
+        assert!(expand_motions(&spec).is_err());
+    }
+}

@@ -1,0 +1,346 @@
+//! The dataset specification (TOML): what to simulate, how to sample it, and the gates.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// A dataset: the garments and motions with their split tags, how many shapes and draws, the
+/// material ranges, solver settings, quality gates and the one-factor test sets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetSpec {
+    /// Dataset name (recorded in the manifest).
+    pub name: String,
+    /// Every sequence's seed derives from this and the sequence's key.
+    pub seed: u64,
+    /// Sequence length and sampling counts.
+    #[serde(default)]
+    pub sequence: SequenceSpec,
+    /// Material ranges (uniform; bending log-uniform).
+    #[serde(default)]
+    pub material: MaterialRanges,
+    /// Solver settings.
+    #[serde(default)]
+    pub solver: SolverSpec,
+    /// Per-sequence quality gates and retries.
+    #[serde(default)]
+    pub gates: GateSpec,
+    /// Garments: library names, built-ins or template OBJ files, each with a split.
+    pub garments: Vec<GarmentEntry>,
+    /// Motions: built-in names (with parameter variants) or AMASS files and globs.
+    pub motions: Vec<MotionEntry>,
+    /// Sizes of the test sets.
+    #[serde(default)]
+    pub splits: SplitSpec,
+}
+
+/// Which side of the split a garment or motion is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tag {
+    /// Seen in training.
+    Train,
+    /// Held out for testing.
+    Test,
+}
+
+/// Sequence length and sampling counts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SequenceSpec {
+    /// Output frames per sequence at 30 fps, blend-in and settle included (default: the whole
+    /// motion after them).
+    pub frames: Option<usize>,
+    /// Frames blending from the canonical pose and shape into the motion.
+    pub blend_frames: usize,
+    /// Frames holding the motion's first frame.
+    pub settle_frames: usize,
+    /// Body shapes drawn per training motion.
+    pub shapes_per_motion: usize,
+    /// Garment + material draws per shape.
+    pub draws_per_shape: usize,
+    /// Shape coefficients drawn per body.
+    pub betas: usize,
+    /// Each coefficient ~ U(min, max).
+    pub betas_range: [f64; 2],
+    /// Cloth-body friction coefficient.
+    pub friction: f64,
+}
+
+impl Default for SequenceSpec {
+    fn default() -> Self {
+        Self {
+            frames: None,
+            blend_frames: 30,
+            settle_frames: 30,
+            shapes_per_motion: 3,
+            draws_per_shape: 3,
+            betas: 10,
+            betas_range: [-1.0, 1.0],
+            friction: 0.3,
+        }
+    }
+}
+
+/// Material ranges.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialRanges {
+    /// Stretch stiffness k_s ~ U(min, max), N/m.
+    pub k_s: [f64; 2],
+    /// Area density rho ~ U(min, max), kg/m^2.
+    pub rho: [f64; 2],
+    /// log10 of the bending stiffness k_b (N m) ~ U(min, max).
+    pub log10_k_b: [f64; 2],
+}
+
+impl Default for MaterialRanges {
+    fn default() -> Self {
+        Self {
+            k_s: [40.0, 200.0],
+            rho: [0.01, 0.7],
+            log10_k_b: [-8.0, -4.0],
+        }
+    }
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    /// Substeps per 30 fps frame.
+    pub substeps: usize,
+    /// Maximum iterations per substep.
+    pub iterations: usize,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            substeps: 2,
+            iterations: 8,
+        }
+    }
+}
+
+/// Quality gates on each sequence's statistics, and what a failure gets.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GateSpec {
+    /// Deepest garment vertex inside the body over all frames, m.
+    pub max_penetration_m: f64,
+    /// Most garment vertices inside the body in any frame, as a fraction of the vertices.
+    pub max_inside_fraction: f64,
+    /// Largest edge length / rest length.
+    pub max_edge_stretch: f64,
+    /// Wall-clock limit per attempt, s.
+    pub timeout_s: f64,
+    /// Attempts after a failed one, each with the retry solver settings.
+    pub retries: usize,
+    /// Substeps of a retry.
+    pub retry_substeps: usize,
+    /// Iterations of a retry.
+    pub retry_iterations: usize,
+}
+
+impl Default for GateSpec {
+    fn default() -> Self {
+        Self {
+            max_penetration_m: 0.02,
+            max_inside_fraction: 0.05,
+            max_edge_stretch: 1.5,
+            timeout_s: 900.0,
+            retries: 1,
+            retry_substeps: 4,
+            retry_iterations: 20,
+        }
+    }
+}
+
+/// A garment of the dataset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentEntry {
+    /// Library design, built-in garment, or template OBJ file.
+    pub name: String,
+    /// Split tag.
+    pub split: Tag,
+}
+
+/// A motion source of the dataset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionEntry {
+    /// Built-in name (optionally `name:speed=..,...`), AMASS .npz file, or a glob of them.
+    pub source: String,
+    /// Parameter variants of a built-in motion (`speed=1.2,amplitude=0.8`), each its own
+    /// motion; none: the source as written.
+    #[serde(default)]
+    pub variants: Vec<String>,
+    /// Split tag.
+    pub split: Tag,
+}
+
+/// Sizes of the test sets (sequences each).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SplitSpec {
+    /// Unseen garments x unseen motions x unseen shapes (and new materials).
+    pub test: usize,
+    /// Only the garment unseen.
+    pub test_garment: usize,
+    /// Only the motion unseen.
+    pub test_motion: usize,
+    /// Only the shape unseen (drawn from `test_betas_range`).
+    pub test_shape: usize,
+    /// Only the material unseen (drawn from `test_material`).
+    pub test_material: usize,
+    /// Shapes of the shape-unseen and all-unseen sets (default: the training range).
+    pub test_betas_range: Option<[f64; 2]>,
+    /// Materials of the material-unseen and all-unseen sets (default: the training ranges).
+    pub test_material_ranges: Option<MaterialRanges>,
+}
+
+impl DatasetSpec {
+    /// Parses and checks a spec; errors name the file and the key at fault.
+    pub fn parse(text: &str, origin: &Path) -> Result<Self> {
+        let spec: DatasetSpec = toml::from_str(text).map_err(|e| Error::Spec {
+            path: origin.display().to_string(),
+            message: e.to_string(),
+        })?;
+        spec.validate().map_err(|message| Error::Spec {
+            path: origin.display().to_string(),
+            message,
+        })?;
+        Ok(spec)
+    }
+
+    /// Reads and checks a spec file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Spec {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// The spec as TOML (the copy stored with a dataset).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_default()
+    }
+
+    fn validate(&self) -> std::result::Result<(), String> {
+        let range = |key: &str, r: [f64; 2], lo: f64, hi: f64| {
+            if !(r[0].is_finite() && r[1].is_finite() && lo <= r[0] && r[0] <= r[1] && r[1] <= hi) {
+                Err(format!(
+                    "{key} = [{}, {}] must be a range within [{lo}, {hi}]",
+                    r[0], r[1]
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        let s = &self.sequence;
+        if self.name.trim().is_empty() {
+            return Err("name must not be empty".into());
+        }
+        if self.garments.is_empty() || self.motions.is_empty() {
+            return Err("garments and motions must each list at least one entry".into());
+        }
+        if s.frames == Some(0) {
+            return Err("sequence.frames must be at least 1".into());
+        }
+        if s.shapes_per_motion == 0 || s.draws_per_shape == 0 {
+            return Err(
+                "sequence.shapes_per_motion and sequence.draws_per_shape must be >= 1".into(),
+            );
+        }
+        if s.betas > 300 {
+            return Err(format!("sequence.betas = {} is more than 300", s.betas));
+        }
+        range("sequence.betas_range", s.betas_range, -5.0, 5.0)?;
+        if !(0.0..=2.0).contains(&s.friction) {
+            return Err(format!(
+                "sequence.friction = {} is outside [0, 2]",
+                s.friction
+            ));
+        }
+        let materials = |prefix: &str, m: &MaterialRanges| {
+            range(&format!("{prefix}.k_s"), m.k_s, 1.0, 1e5)?;
+            range(&format!("{prefix}.rho"), m.rho, 1e-3, 10.0)?;
+            range(&format!("{prefix}.log10_k_b"), m.log10_k_b, -12.0, -1.0)
+        };
+        materials("material", &self.material)?;
+        if let Some(m) = &self.splits.test_material_ranges {
+            materials("splits.test_material_ranges", m)?;
+        }
+        if let Some(r) = self.splits.test_betas_range {
+            range("splits.test_betas_range", r, -5.0, 5.0)?;
+        }
+        let v = &self.solver;
+        let g = &self.gates;
+        for (key, n) in [
+            ("solver.substeps", v.substeps),
+            ("solver.iterations", v.iterations),
+            ("gates.retry_substeps", g.retry_substeps),
+            ("gates.retry_iterations", g.retry_iterations),
+        ] {
+            if !(1..=200).contains(&n) {
+                return Err(format!("{key} = {n} is outside 1..=200"));
+            }
+        }
+        for (key, x) in [
+            ("gates.max_penetration_m", g.max_penetration_m),
+            ("gates.max_inside_fraction", g.max_inside_fraction),
+            ("gates.max_edge_stretch", g.max_edge_stretch),
+            ("gates.timeout_s", g.timeout_s),
+        ] {
+            if !(x.is_finite() && x > 0.0) {
+                return Err(format!("{key} = {x} must be a positive number"));
+            }
+        }
+        let has = |tag: Tag| self.garments.iter().any(|e| e.split == tag);
+        let has_motion = |tag: Tag| self.motions.iter().any(|e| e.split == tag);
+        let sp = &self.splits;
+        let needs = [
+            (
+                "splits.test",
+                sp.test,
+                has(Tag::Test) && has_motion(Tag::Test),
+            ),
+            (
+                "splits.test_garment",
+                sp.test_garment,
+                has(Tag::Test) && has_motion(Tag::Train),
+            ),
+            (
+                "splits.test_motion",
+                sp.test_motion,
+                has(Tag::Train) && has_motion(Tag::Test),
+            ),
+            (
+                "splits.test_shape",
+                sp.test_shape,
+                has(Tag::Train) && has_motion(Tag::Train),
+            ),
+            (
+                "splits.test_material",
+                sp.test_material,
+                has(Tag::Train) && has_motion(Tag::Train),
+            ),
+        ];
+        for (key, n, ok) in needs {
+            if n > 0 && !ok {
+                return Err(format!(
+                    "{key} = {n} needs garments and motions with the split tags it draws from"
+                ));
+            }
+        }
+        if !has(Tag::Train) || !has_motion(Tag::Train) {
+            return Err("at least one garment and one motion must have split = \"train\"".into());
+        }
+        Ok(())
+    }
+}
