@@ -37,6 +37,14 @@ pub enum Command {
     /// Write one self-contained HTML page (WebGL, no network) that plays one or two recordings
     /// side by side, synchronized, with an orbit camera.
     View(ViewArgs),
+    /// Synthesize a dataset from a TOML spec: sequences in parallel, quality gates, MCAP files
+    /// and a JSON Lines manifest; resumable, sharded on Slurm or Kubernetes.
+    Synth(SynthArgs),
+    /// Check, summarize and merge datasets written by `synth`.
+    Dataset {
+        #[command(subcommand)]
+        command: DatasetCommand,
+    },
     /// Pose a body (default body or an SMPL .npz model) and write it as OBJ in the model's
     /// vertex order.
     Body(BodyArgs),
@@ -243,6 +251,70 @@ pub struct CompareArgs {
     /// Seed of the surface samples.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+#[derive(Debug, Args)]
+pub struct SynthArgs {
+    /// Dataset spec (TOML; `--example-spec tiny` prints a commented one).
+    #[arg(long, required_unless_present = "example_spec")]
+    pub spec: Option<PathBuf>,
+    /// Dataset folder (created; a re-run resumes it).
+    #[arg(long, required_unless_present = "example_spec")]
+    pub out: Option<PathBuf>,
+    /// Print an example spec and exit: `tiny` (4 short sequences) or `paper` (paper-like).
+    #[arg(long, value_parser = ["tiny", "paper"])]
+    pub example_spec: Option<String>,
+    /// Sequences simulated at once (default: the number of cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// This task's shard as K/N (K from 0). Default: from a Slurm job array
+    /// (SLURM_ARRAY_TASK_ID, _COUNT, _MIN) or a Kubernetes indexed job (JOB_COMPLETION_INDEX
+    /// with --shard-count), else the whole dataset.
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Number of shards of a Kubernetes indexed job (its `completions`).
+    #[arg(long)]
+    pub shard_count: Option<usize>,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Write the run's numbers (`planned`, `simulated`, `skipped`, `failed`, `frames`,
+    /// `frames_per_s`, `sequences_per_hour`, ...) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum DatasetCommand {
+    /// Check a dataset: checksums, recordings, counts against the plan, gate results; exits
+    /// non-zero on any mismatch.
+    Verify {
+        /// Dataset folder.
+        dir: PathBuf,
+        /// Also write `sequences`, `planned`, `passed`, `problems`, `ok` here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Counts per split, garment and motion; material histograms; gate failures; frames and
+    /// hours.
+    Stats {
+        /// Dataset folder.
+        dir: PathBuf,
+        /// Also write `sequences`, `failed`, `frames`, `splits`, ... here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Merge shard folders (or one shared folder) into OUT and write its manifest; refuses
+    /// while any planned sequence is unfinished.
+    Merge {
+        /// Output folder (may be one of the inputs).
+        out: PathBuf,
+        /// Shard folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+    },
 }
 
 /// What the garment is coloured by in `render`.

@@ -2,6 +2,7 @@
 
 mod body;
 mod compare;
+mod dataset_cmd;
 mod demo;
 mod drape_bench;
 mod garments_cmd;
@@ -9,6 +10,7 @@ mod motions_cmd;
 mod regress;
 mod render;
 mod simulate;
+mod synth;
 
 use anyhow::Result;
 
@@ -24,6 +26,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Regress(args) => regress::run(&args),
         Command::Render(args) => render::run(&args),
         Command::View(args) => render::view(&args),
+        Command::Synth(args) => synth::run(&args),
+        Command::Dataset { command } => dataset_cmd::run(command),
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
         Command::Garments { command } => garments_cmd::run(command),

@@ -1,0 +1,498 @@
+//! `dit-garment synth`: a dataset from a TOML spec, sequences in parallel, resumable, sharded
+//! by Slurm job arrays or Kubernetes indexed jobs.
+//!
+//! Layout of a dataset folder: `spec.toml` (the spec), `plan.jsonl` (every planned sequence),
+//! `templates/<garment>.obj`, `sequences/<id>.mcap`, `records/<id>.json` (one manifest line
+//! per finished sequence, written after its recording) and `manifest.jsonl` (the records in
+//! plan order, written when every sequence has one). Every file is written to a temporary name
+//! and renamed, so a killed run leaves only whole files; a re-run skips sequences whose record
+//! exists and whose recording matches the record's checksum.
+
+use std::collections::HashMap;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use motions::BodyModel;
+use rayon::prelude::*;
+use serde_json::json;
+use sha2::{Digest, Sha256};
+use sim::dataset::{
+    Attempt, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, expand_motions, plan,
+};
+use sim::scene::BodyAttachment;
+
+use super::simulate::{RecordOptions, TIMED_OUT, prepare_with, record};
+use crate::cli::{ModelArgs, SceneArgs, SynthArgs};
+use crate::inputs;
+use crate::output::{write_atomic, write_json};
+
+/// The tiny example spec (4 sequences of 30 frames).
+pub const TINY_SPEC: &str = include_str!("../../specs/tiny.toml");
+/// The paper-like example spec on the built-in library.
+pub const PAPER_SPEC: &str = include_str!("../../specs/paper.toml");
+
+/// Paths inside a dataset folder.
+pub struct DatasetDir {
+    pub root: PathBuf,
+}
+
+impl DatasetDir {
+    pub fn new(root: &Path) -> Self {
+        Self {
+            root: root.to_path_buf(),
+        }
+    }
+    pub fn spec(&self) -> PathBuf {
+        self.root.join("spec.toml")
+    }
+    pub fn plan(&self) -> PathBuf {
+        self.root.join("plan.jsonl")
+    }
+    pub fn manifest(&self) -> PathBuf {
+        self.root.join("manifest.jsonl")
+    }
+    pub fn sequence_file(id: &str) -> String {
+        format!("sequences/{id}.mcap")
+    }
+    pub fn record(&self, id: &str) -> PathBuf {
+        self.root.join("records").join(format!("{id}.json"))
+    }
+    pub fn template(&self, garment: &str) -> PathBuf {
+        let name: String = Path::new(garment)
+            .file_stem()
+            .map_or(garment.into(), |s| s.to_string_lossy().into_owned());
+        self.root.join("templates").join(format!("{name}.obj"))
+    }
+}
+
+/// SHA-256 of a file, hex.
+pub fn sha256_file(path: &Path) -> Result<(String, u64)> {
+    let mut file =
+        std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut hasher = Sha256::new();
+    let mut buffer = vec![0u8; 1 << 20];
+    let mut bytes = 0u64;
+    loop {
+        let n = file.read(&mut buffer)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buffer[..n]);
+        bytes += n as u64;
+    }
+    let hex = hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    Ok((hex, bytes))
+}
+
+/// Reads a JSON Lines file of `T`, naming the file and line of a bad one.
+pub fn read_jsonl<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            serde_json::from_str(l)
+                .with_context(|| format!("{} line {}: not a valid entry", path.display(), i + 1))
+        })
+        .collect()
+}
+
+/// Writes values as JSON Lines, atomically.
+pub fn write_jsonl<T: serde::Serialize>(path: &Path, values: &[T]) -> Result<()> {
+    write_atomic(path, |w| {
+        for v in values {
+            serde_json::to_writer(&mut *w, v)?;
+            writeln!(w)?;
+        }
+        Ok(())
+    })
+}
+
+/// A finished sequence's record, if it is complete: the record parses and its recording (if
+/// any) matches the checksum.
+pub fn finished_record(dir: &DatasetDir, id: &str) -> Option<ManifestRecord> {
+    let text = std::fs::read_to_string(dir.record(id)).ok()?;
+    let record: ManifestRecord = serde_json::from_str(&text).ok()?;
+    if let (Some(file), Some(sha)) = (&record.file, &record.sha256) {
+        let (actual, _) = sha256_file(&dir.root.join(file)).ok()?;
+        if &actual != sha {
+            return None;
+        }
+    }
+    Some(record)
+}
+
+/// This task's shard (K, N): `--shard K/N`, else a Slurm job array, else a Kubernetes indexed
+/// job (with `--shard-count`), else the whole dataset.
+fn shard(args: &SynthArgs) -> Result<(usize, usize)> {
+    let env = |name: &str| -> Result<Option<usize>> {
+        match std::env::var(name) {
+            Ok(v) => Ok(Some(v.trim().parse().with_context(|| {
+                format!("environment variable {name}='{v}' is not a number")
+            })?)),
+            Err(_) => Ok(None),
+        }
+    };
+    let (k, n) = if let Some(s) = &args.shard {
+        let (k, n) = s
+            .split_once('/')
+            .with_context(|| format!("--shard '{s}' must be K/N, e.g. 0/4"))?;
+        let parse = |v: &str| {
+            v.trim()
+                .parse::<usize>()
+                .with_context(|| format!("--shard '{s}' must be K/N with whole numbers"))
+        };
+        (parse(k)?, parse(n)?)
+    } else if let Some(id) = env("SLURM_ARRAY_TASK_ID")? {
+        let count = env("SLURM_ARRAY_TASK_COUNT")?
+            .context("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")?;
+        let min = env("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+        (
+            id.checked_sub(min)
+                .context("SLURM_ARRAY_TASK_ID < SLURM_ARRAY_TASK_MIN")?,
+            count,
+        )
+    } else if let Some(index) = env("JOB_COMPLETION_INDEX")? {
+        let count = args
+            .shard_count
+            .context("JOB_COMPLETION_INDEX is set: pass the job's completions as --shard-count")?;
+        (index, count)
+    } else {
+        (0, 1)
+    };
+    if n == 0 || k >= n {
+        bail!("shard {k}/{n} is out of range (K must be below N)");
+    }
+    Ok((k, n))
+}
+
+/// Removes what killed runs left: temporary files of this shard's sequences.
+fn remove_leftovers(dir: &DatasetDir, ids: &[&str]) -> Result<usize> {
+    let mut removed = 0;
+    for folder in ["sequences", "records"] {
+        let path = dir.root.join(folder);
+        let Ok(entries) = std::fs::read_dir(&path) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name.ends_with(".tmp")
+                && ids.iter().any(|id| {
+                    name.starts_with(&format!("{id}.mcap."))
+                        || name.starts_with(&format!("{id}.json."))
+                })
+            {
+                std::fs::remove_file(entry.path())?;
+                removed += 1;
+            }
+        }
+    }
+    Ok(removed)
+}
+
+/// What every sequence of a run shares.
+struct RunContext<'a> {
+    spec: &'a DatasetSpec,
+    dir: &'a DatasetDir,
+    model: Arc<BodyModel>,
+    templates: HashMap<String, (Arc<garments::Garment>, Vec<BodyAttachment>)>,
+    software: String,
+}
+
+/// Simulates one sequence (with retries) into its recording and record.
+fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
+    let spec = ctx.spec;
+    let (garment, attachments) = &ctx.templates[&p.garment];
+    let file = DatasetDir::sequence_file(&p.id);
+    let path = ctx.dir.root.join(&file);
+    let material = sim::Material {
+        stretch: p.material.k_s_n_per_m,
+        density: p.material.rho_kg_per_m2,
+        bending: p.material.k_b_n_m,
+    };
+    let settings =
+        std::iter::once((spec.solver.substeps, spec.solver.iterations)).chain(std::iter::repeat_n(
+            (spec.gates.retry_substeps, spec.gates.retry_iterations),
+            spec.gates.retries,
+        ));
+    let mut attempts = Vec::new();
+    let mut frames = 0;
+    let started = Instant::now();
+    for (substeps, iterations) in settings {
+        // The recording always belongs to the last attempt that finished.
+        let _ = std::fs::remove_file(&path);
+        let args = SceneArgs {
+            garment: p.garment.clone(),
+            motion: p.motion.clone(),
+            model: ModelArgs { model: None },
+            betas: p.betas.clone(),
+            material: String::new(),
+            friction: p.friction,
+            frames: spec.sequence.frames,
+            blend_frames: spec.sequence.blend_frames,
+            settle_frames: spec.sequence.settle_frames,
+            substeps,
+            iterations,
+        };
+        let attempt_started = Instant::now();
+        let prepared = prepare_with(
+            ctx.model.clone(),
+            garment.clone(),
+            attachments.clone(),
+            material,
+            &args,
+        );
+        let (gates, solver) = match prepared {
+            Err(e) => (
+                GateResult::unfinished(format!("could not set up: {e:#}"), false),
+                sim::SolverParams::default(),
+            ),
+            Ok(prepared) => {
+                frames = prepared.scene.num_frames();
+                let options = RecordOptions {
+                    quiet: true,
+                    seed: Some(p.seed),
+                    deadline: Some(attempt_started + Duration::from_secs_f64(spec.gates.timeout_s)),
+                    ..RecordOptions::default()
+                };
+                let gates = match record(&prepared, &path, options) {
+                    Ok(summary) => GateResult::judge(&summary, &spec.gates),
+                    Err(e) => {
+                        let message = format!("{e:#}");
+                        let timed_out = message.contains(TIMED_OUT);
+                        let reason = if timed_out {
+                            format!("time-out after {} s", spec.gates.timeout_s)
+                        } else {
+                            format!("solver: {message}")
+                        };
+                        GateResult::unfinished(reason, timed_out)
+                    }
+                };
+                (gates, prepared.scene.params)
+            }
+        };
+        let passed = gates.passed;
+        attempts.push(Attempt {
+            solver,
+            gates,
+            wall_s: attempt_started.elapsed().as_secs_f64(),
+        });
+        if passed {
+            break;
+        }
+    }
+    let last = attempts.last().expect("at least one attempt");
+    let ok = last.gates.passed;
+    let (file, sha256, bytes) = if path.exists() {
+        let (sha, bytes) = sha256_file(&path)?;
+        (Some(file), Some(sha), bytes)
+    } else {
+        (None, None, 0)
+    };
+    Ok(ManifestRecord {
+        id: p.id.clone(),
+        split: p.split.clone(),
+        garment: p.garment.clone(),
+        motion: p.motion.clone(),
+        betas: p.betas.clone(),
+        material: p.material,
+        friction: p.friction,
+        seed: p.seed,
+        frames,
+        vertices: garment.positions.len(),
+        status: if ok { "ok" } else { "failed" }.into(),
+        reason: (!ok).then(|| last.gates.failed.join("; ")),
+        attempts,
+        file,
+        sha256,
+        bytes,
+        software: ctx.software.clone(),
+        wall_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Stores the spec in the folder, refusing a folder that holds another spec's dataset.
+fn store_spec(dir: &DatasetDir, spec: &DatasetSpec) -> Result<()> {
+    let path = dir.spec();
+    if path.exists() {
+        let existing = DatasetSpec::load(&path)?;
+        if &existing != spec {
+            bail!(
+                "{} holds a dataset of a different spec (its spec.toml differs); use another --out",
+                dir.root.display()
+            );
+        }
+        return Ok(());
+    }
+    write_atomic(&path, |w| {
+        w.write_all(spec.to_toml().as_bytes())?;
+        Ok(())
+    })
+}
+
+/// Writes the manifest when every planned sequence has a record; returns the missing count.
+pub fn write_manifest(dir: &DatasetDir, planned: &[PlannedSequence]) -> Result<usize> {
+    let mut records = Vec::with_capacity(planned.len());
+    let mut missing = 0;
+    for p in planned {
+        match finished_record(dir, &p.id) {
+            Some(r) => records.push(r),
+            None => missing += 1,
+        }
+    }
+    if missing == 0 {
+        write_jsonl(&dir.manifest(), &records)?;
+    }
+    Ok(missing)
+}
+
+pub fn run(args: &SynthArgs) -> Result<()> {
+    if let Some(which) = &args.example_spec {
+        print!(
+            "{}",
+            if which == "paper" {
+                PAPER_SPEC
+            } else {
+                TINY_SPEC
+            }
+        );
+        return Ok(());
+    }
+    let (Some(spec_path), Some(out)) = (&args.spec, &args.out) else {
+        bail!("synth needs --spec FILE and --out DIR (or --example-spec tiny|paper)");
+    };
+    let spec = DatasetSpec::load(spec_path)?;
+    let (k, n) = shard(args)?;
+    let motions = expand_motions(&spec).with_context(|| format!("{}", spec_path.display()))?;
+    let planned = plan(&spec, &motions);
+    let dir = DatasetDir::new(out);
+    std::fs::create_dir_all(&dir.root)
+        .with_context(|| format!("cannot create {}", dir.root.display()))?;
+    store_spec(&dir, &spec)?;
+    write_jsonl(&dir.plan(), &planned)?;
+    let mine: Vec<&PlannedSequence> = planned
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % n == k)
+        .map(|(_, p)| p)
+        .collect();
+    let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
+    let leftovers = remove_leftovers(&dir, &ids)?;
+    let todo: Vec<&PlannedSequence> = mine
+        .iter()
+        .copied()
+        .filter(|p| finished_record(&dir, &p.id).is_none())
+        .collect();
+    println!(
+        "synth '{}': {} sequences planned, shard {k}/{n} has {}, {} already done{}",
+        spec.name,
+        planned.len(),
+        mine.len(),
+        mine.len() - todo.len(),
+        if leftovers > 0 {
+            format!(", {leftovers} leftover temporary files removed")
+        } else {
+            String::new()
+        }
+    );
+    let model = Arc::new(inputs::body_model(args.model.model.as_deref())?);
+    let mut templates = HashMap::new();
+    for p in &todo {
+        if templates.contains_key(&p.garment) {
+            continue;
+        }
+        let (garment, attachments) = inputs::garment(&p.garment, &model)
+            .with_context(|| format!("{}: garment '{}'", spec_path.display(), p.garment))?;
+        let template_path = dir.template(&p.garment);
+        if !template_path.exists() {
+            inputs::write_template(&template_path, &garment)?;
+        }
+        templates.insert(p.garment.clone(), (Arc::new(garment), attachments));
+    }
+    let ctx = RunContext {
+        spec: &spec,
+        dir: &dir,
+        model,
+        templates,
+        software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
+    };
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()?;
+    let bar = ProgressBar::new(todo.len() as u64).with_style(
+        ProgressStyle::with_template("synth [{bar:30}] {pos}/{len} sequences ({msg}, eta {eta})")?
+            .progress_chars("=> "),
+    );
+    if args.quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let started = Instant::now();
+    let frames_done = AtomicUsize::new(0);
+    let failed = AtomicUsize::new(0);
+    pool.install(|| {
+        todo.par_iter().try_for_each(|p| -> Result<()> {
+            let record = synthesize(&ctx, p).with_context(|| format!("sequence {}", p.id))?;
+            write_json(&dir.record(&p.id), &record)?;
+            let done = frames_done.fetch_add(record.frames, Ordering::Relaxed) + record.frames;
+            if !record.ok() {
+                failed.fetch_add(1, Ordering::Relaxed);
+                bar.println(format!(
+                    "  {} failed its gates: {}",
+                    record.id,
+                    record.reason.as_deref().unwrap_or("")
+                ));
+            }
+            bar.set_message(format!(
+                "{:.1} frames/s",
+                done as f64 / started.elapsed().as_secs_f64()
+            ));
+            bar.inc(1);
+            Ok(())
+        })
+    })?;
+    bar.finish_and_clear();
+    let wall = started.elapsed().as_secs_f64();
+    let frames = frames_done.load(Ordering::Relaxed);
+    let failed = failed.load(Ordering::Relaxed);
+    let missing = write_manifest(&dir, &planned)?;
+    let summary = json!({
+        "name": spec.name, "shard": [k, n], "planned": planned.len(), "shard_sequences": mine.len(),
+        "simulated": todo.len(), "skipped": mine.len() - todo.len(), "failed": failed,
+        "frames": frames, "wall_s": wall,
+        "frames_per_s": if wall > 0.0 { frames as f64 / wall } else { 0.0 },
+        "sequences_per_hour": if wall > 0.0 { todo.len() as f64 / wall * 3600.0 } else { 0.0 },
+        "jobs": jobs, "manifest": (missing == 0).then(|| dir.manifest()),
+    });
+    println!(
+        "synth: {} sequences simulated ({failed} failed their gates), {frames} frames in {wall:.1} s ({:.1} frames/s, {:.0} sequences/h, {jobs} jobs)",
+        todo.len(),
+        summary["frames_per_s"].as_f64().unwrap_or(0.0),
+        summary["sequences_per_hour"].as_f64().unwrap_or(0.0),
+    );
+    if missing == 0 {
+        println!("  wrote {}", dir.manifest().display());
+    } else {
+        println!(
+            "  {missing} sequences of other shards are not done yet; when all shards finish, run `dit-garment dataset merge {} {}`",
+            dir.root.display(),
+            dir.root.display()
+        );
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &summary)?;
+    }
+    Ok(())
+}
