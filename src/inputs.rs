@@ -148,7 +148,8 @@ pub fn cache_dir() -> std::path::PathBuf {
 /// A library design's template on `model`, made (sewn and draped, about 5-20 s) on first use
 /// and cached under [`cache_dir`], keyed by the pattern, the body, the sewing options and the
 /// software version.
-/// Refused when the design fails a quality gate.
+/// Refused when the design fails a quality gate. The cached OBJ is always what is returned (read
+/// back after making), so results do not depend on whether the cache was warm.
 pub fn library_template(
     design: &garments::library::Design,
     model: &BodyModel,
@@ -165,28 +166,28 @@ pub fn library_template(
         v.map(f64::to_bits).hash(&mut hasher);
     }
     let path = cache_dir().join(format!("{}-{:016x}.obj", design.name, hasher.finish()));
-    if path.exists() {
-        let mut cached = garments::read_obj(&path)?;
-        cached.name = design.name.to_string();
-        cached.validate()?;
-        return Ok(cached);
-    }
-    eprintln!(
-        "making the template of '{}' (first use; cached in {})",
-        design.name,
-        path.display()
-    );
-    let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
-    let (template, report) = sim::sewing::sew(model, &mesh, &options)?;
-    if !report.gates_passed {
-        bail!(
-            "the template of '{}' failed its quality gates: {}",
+    if !path.exists() {
+        eprintln!(
+            "making the template of '{}' (first use; cached in {})",
             design.name,
-            report.failed.join("; ")
+            path.display()
         );
+        let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+        let (template, report) = sim::sewing::sew(model, &mesh, &options)?;
+        if !report.gates_passed {
+            bail!(
+                "the template of '{}' failed its quality gates: {}",
+                design.name,
+                report.failed.join("; ")
+            );
+        }
+        write_template(&path, &template)?;
     }
-    write_template(&path, &template)?;
-    Ok(template)
+    // Always the cached file, so the first use and every later one simulate the same numbers.
+    let mut cached = garments::read_obj(&path)?;
+    cached.name = design.name.to_string();
+    cached.validate()?;
+    Ok(cached)
 }
 
 /// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically.

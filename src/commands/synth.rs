@@ -406,6 +406,12 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         }
     );
     let model = Arc::new(inputs::body_model(args.model.model.as_deref())?);
+    // Every motion loads before anything is simulated, so a typo fails the run at once.
+    let neutral = model.shape(&[])?;
+    for (source, _) in &motions {
+        inputs::motion(source, &model, &neutral)
+            .with_context(|| format!("{}: motion '{source}'", spec_path.display()))?;
+    }
     let mut templates = HashMap::new();
     for p in &todo {
         if templates.contains_key(&p.garment) {
