@@ -412,19 +412,23 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         inputs::motion(source, &model, &neutral)
             .with_context(|| format!("{}: motion '{source}'", spec_path.display()))?;
     }
-    let mut templates = HashMap::new();
-    for p in &todo {
-        if templates.contains_key(&p.garment) {
-            continue;
-        }
-        let (garment, attachments) = inputs::garment(&p.garment, &model)
-            .with_context(|| format!("{}: garment '{}'", spec_path.display(), p.garment))?;
-        let template_path = dir.template(&p.garment);
-        if !template_path.exists() {
-            inputs::write_template(&template_path, &garment)?;
-        }
-        templates.insert(p.garment.clone(), (Arc::new(garment), attachments));
-    }
+    // Templates of the garments still to simulate, made (or read from the cache) in parallel.
+    let mut names: Vec<&String> = todo.iter().map(|p| &p.garment).collect();
+    names.sort();
+    names.dedup();
+    let made = names
+        .par_iter()
+        .map(|name| {
+            let (garment, attachments) = inputs::garment(name, &model)
+                .with_context(|| format!("{}: garment '{name}'", spec_path.display()))?;
+            let template_path = dir.template(name);
+            if !template_path.exists() {
+                inputs::write_template(&template_path, &garment)?;
+            }
+            Ok(((*name).clone(), (Arc::new(garment), attachments)))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let templates: HashMap<_, _> = made.into_iter().collect();
     let ctx = RunContext {
         spec: &spec,
         dir: &dir,
@@ -455,11 +459,23 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             let done = frames_done.fetch_add(record.frames, Ordering::Relaxed) + record.frames;
             if !record.ok() {
                 failed.fetch_add(1, Ordering::Relaxed);
-                bar.println(format!(
-                    "  {} failed its gates: {}",
+            }
+            // One line per sequence where no bar is drawn (logs of batch jobs), and for every
+            // failure.
+            if !record.ok() || (bar.is_hidden() && !args.quiet) {
+                let line = format!(
+                    "  {} {} ({} frames, {:.1} s){}",
                     record.id,
-                    record.reason.as_deref().unwrap_or("")
-                ));
+                    record.status,
+                    record.frames,
+                    record.wall_s,
+                    record
+                        .reason
+                        .as_ref()
+                        .map(|r| format!(": {r}"))
+                        .unwrap_or_default()
+                );
+                bar.suspend(|| eprintln!("{line}"));
             }
             bar.set_message(format!(
                 "{:.1} frames/s",
