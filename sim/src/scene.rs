@@ -216,6 +216,9 @@ pub struct FrameStats {
     pub max_edge_stretch: f64,
     /// Mean edge length / rest length.
     pub mean_edge_stretch: f64,
+    /// Pairs of garment triangles (sharing no vertex) that cross each other.
+    #[serde(default)]
+    pub self_intersections: usize,
     /// Kinetic energy, J.
     pub kinetic_energy_j: f64,
     /// Wall time of the frame, s.
@@ -256,6 +259,8 @@ pub struct RunSummary {
     pub max_verts_inside: usize,
     /// Largest edge stretch over the frames.
     pub max_edge_stretch: f64,
+    /// Largest count of crossing garment triangle pairs over the frames.
+    pub max_self_intersections: usize,
     /// Garment vertices.
     pub vertices: usize,
     /// Mean iterations per step.
@@ -514,6 +519,8 @@ impl Scene {
         let inside = distances.iter().filter(|&&d| d < 0.0).count();
         let depth = distances.iter().fold(0.0f64, |a, &d| a.max(-d));
         let (max_stretch, mean_stretch) = edge_stretch(mesh, &state.positions);
+        let self_intersections =
+            crate::count_self_intersections(&state.positions, mesh.triangles());
         FrameStats {
             frame,
             solver: report,
@@ -521,6 +528,7 @@ impl Scene {
             vertices_inside: inside,
             max_edge_stretch: max_stretch,
             mean_edge_stretch: mean_stretch,
+            self_intersections,
             kinetic_energy_j: solver.kinetic_energy(state),
             wall_s: wall,
         }
@@ -531,6 +539,7 @@ fn accumulate(summary: &mut RunSummary, stats: &FrameStats) {
     summary.max_penetration_m = summary.max_penetration_m.max(stats.max_penetration_m);
     summary.max_verts_inside = summary.max_verts_inside.max(stats.vertices_inside);
     summary.max_edge_stretch = summary.max_edge_stretch.max(stats.max_edge_stretch);
+    summary.max_self_intersections = summary.max_self_intersections.max(stats.self_intersections);
 }
 
 fn body_obstacle(obstacles: &mut [Box<dyn Obstacle>]) -> &mut AnimatedMesh {

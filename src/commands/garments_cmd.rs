@@ -38,8 +38,8 @@ struct MakeReport {
     name: String,
     #[serde(flatten)]
     sewing: sim::sewing::SewingReport,
-    /// Self-intersections are counted once self-contact exists (issue 8); null until then.
-    self_intersections: Option<usize>,
+    /// Crossing triangle pairs of the template (reported, not gated until self-contact).
+    self_intersections: usize,
     edge_length_m: f64,
     mesh_s: f64,
     wall_s: f64,
@@ -179,7 +179,14 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
     let made = MakeReport {
         name: pattern.name.clone(),
         sewing,
-        self_intersections: None,
+        self_intersections: sim::count_self_intersections(
+            &template
+                .positions
+                .iter()
+                .map(|p| sim::Vec3::new(p[0], p[1], p[2]))
+                .collect::<Vec<_>>(),
+            &template.triangles,
+        ),
         edge_length_m: edge_length,
         mesh_s,
         wall_s: started.elapsed().as_secs_f64(),

@@ -192,7 +192,8 @@ pub fn summary_json(s: &RunSummary, out: &Path) -> serde_json::Value {
     json!({
         "frames": s.frames, "finite": s.finite, "wall_s": s.wall_s, "frames_per_s": s.frames_per_s,
         "max_penetration_m": s.max_penetration_m, "max_verts_inside": s.max_verts_inside,
-        "max_edge_stretch": s.max_edge_stretch, "vertices": s.vertices,
+        "max_edge_stretch": s.max_edge_stretch, "max_self_intersections": s.max_self_intersections,
+        "vertices": s.vertices,
         "mean_iterations": s.mean_iterations, "deep_contacts": s.deep_contacts,
         "retried_frames": s.retried_frames, "stages_s": s.stages, "posing_s": s.posing_s,
         "recording": out,
@@ -226,10 +227,11 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         s.frames_per_s
     );
     println!(
-        "  max penetration {:.1} mm, at most {} vertices inside, max edge stretch {:.3}; wrote {}",
+        "  max penetration {:.1} mm, at most {} vertices inside, max edge stretch {:.3}, at most {} self-intersections; wrote {}",
         s.max_penetration_m * 1e3,
         s.max_verts_inside,
         s.max_edge_stretch,
+        s.max_self_intersections,
         args.out.display()
     );
     Ok(())

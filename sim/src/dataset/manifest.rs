@@ -23,6 +23,10 @@ pub struct GateResult {
     pub max_verts_inside: usize,
     /// Largest edge stretch.
     pub max_edge_stretch: f64,
+    /// Most crossing garment triangle pairs in one frame (recorded; not a gate until the
+    /// engine has self-contact).
+    #[serde(default)]
+    pub max_self_intersections: usize,
     /// The attempt ran past the time limit.
     pub timed_out: bool,
     /// Whether every gate passed.
@@ -63,6 +67,7 @@ impl GateResult {
             max_penetration_m: summary.max_penetration_m,
             max_verts_inside: summary.max_verts_inside,
             max_edge_stretch: summary.max_edge_stretch,
+            max_self_intersections: summary.max_self_intersections,
             timed_out: false,
             passed: failed.is_empty(),
             failed,
@@ -76,6 +81,7 @@ impl GateResult {
             max_penetration_m: f64::NAN,
             max_verts_inside: 0,
             max_edge_stretch: f64::NAN,
+            max_self_intersections: 0,
             timed_out,
             passed: false,
             failed: vec![reason],
