@@ -278,11 +278,14 @@ pub fn render_recording(
     let started = Instant::now();
     let seq = Sequence::open(path, model, with_body)?;
     let n = seq.frames();
-    let frames: Vec<usize> = if job.frames.is_empty() {
+    let mut frames: Vec<usize> = if job.frames.is_empty() {
         (0..6).map(|i| i * (n - 1) / 5).collect::<Vec<_>>()
     } else {
         job.frames.to_vec()
     };
+    // A frame asked for twice (or a short recording's default picks) is drawn once.
+    let mut seen = std::collections::HashSet::new();
+    frames.retain(|k| seen.insert(*k));
     if let Some(&k) = frames.iter().find(|&&k| k >= n) {
         bail!(
             "frame {k} is past the end of {} ({n} frames)",
