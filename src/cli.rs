@@ -261,8 +261,9 @@ pub struct SynthArgs {
     /// Dataset folder (created; a re-run resumes it).
     #[arg(long, required_unless_present = "example_spec")]
     pub out: Option<PathBuf>,
-    /// Print an example spec and exit: `tiny` (4 short sequences) or `paper` (paper-like).
-    #[arg(long, value_parser = ["tiny", "paper"])]
+    /// Print an example spec and exit: `tiny` (4 short sequences, the default) or `paper`
+    /// (paper-like).
+    #[arg(long, value_parser = ["tiny", "paper"], num_args = 0..=1, default_missing_value = "tiny")]
     pub example_spec: Option<String>,
     /// Sequences simulated at once (default: the number of cores).
     #[arg(long)]

@@ -169,6 +169,11 @@ fn tiny_example_spec_synthesizes_verifies_and_reports_stats() {
     );
     let paper = ok(&["synth", "--example-spec", "paper"]);
     assert!(paper.contains("paper-like"));
+    assert_eq!(
+        ok(&["synth", "--example-spec"]),
+        spec,
+        "tiny is the default example"
+    );
 }
 
 #[test]
