@@ -1,37 +1,12 @@
 //! End-to-end: the `dit-garment` binary as a user runs it, outputs read back with public
 //! libraries (mcap, serde_json), and bad input failing cleanly with nothing half-written.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
 
+use common::{fails, json, ok};
 use serde_json::Value;
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dit-garment"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).to_string()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = run(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
-
-fn json(path: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
 
 /// Counts MCAP messages per topic.
 fn topics(path: &Path) -> std::collections::BTreeMap<String, usize> {

@@ -2,56 +2,15 @@
 //! SIGKILL at random moments then resume, shards (flags, Slurm and Kubernetes variables) and
 //! merge, verify catching tampering, and bad specs.
 
+mod common;
+
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
+use common::{binary, fails, ok, run_with};
 use serde_json::Value;
-
-fn binary() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_dit-garment"));
-    // Library templates made by the tests go to a cache of their own.
-    c.env(
-        "DIT_GARMENT_CACHE",
-        std::env::temp_dir().join("dit-garment-test-cache"),
-    );
-    for v in [
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-        "JOB_COMPLETION_INDEX",
-    ] {
-        c.env_remove(v);
-    }
-    c
-}
-
-fn run_with(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = binary();
-    c.args(args);
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = run_with(args, &[]);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).to_string()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = run_with(args, &[]);
-    assert!(!out.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
 
 /// Eight 10-frame skirt sequences: quick, and long enough to be killed mid-way.
 const SMALL_SPEC: &str = r#"
@@ -73,6 +32,20 @@ split = "train"
 source = "arm_swing"
 split = "train"
 "#;
+
+/// `synth --spec SPEC --out OUT --quiet` and extra flags.
+fn synth_args<'a>(spec: &'a str, out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "synth",
+        "--spec",
+        spec,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
 
 fn write_spec(dir: &Path, text: &str) -> PathBuf {
     let path = dir.join("spec.toml");
@@ -124,16 +97,11 @@ fn tiny_example_spec_synthesizes_verifies_and_reports_stats() {
     let spec_path = write_spec(dir.path(), &spec);
     let out = dir.path().join("tiny");
     let report = dir.path().join("synth.json");
-    ok(&[
-        "synth",
-        "--spec",
+    ok(&synth_args(
         spec_path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--json",
-        report.to_str().unwrap(),
-        "--quiet",
-    ]);
+        &out,
+        &["--json", report.to_str().unwrap()],
+    ));
     ok(&["dataset", "verify", out.to_str().unwrap()]);
     let stats_path = dir.path().join("stats.json");
     ok(&[
@@ -181,14 +149,7 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
     let dir = tempfile::tempdir().unwrap();
     let spec = write_spec(dir.path(), SMALL_SPEC);
     let clean = dir.path().join("clean");
-    ok(&[
-        "synth",
-        "--spec",
-        spec.to_str().unwrap(),
-        "--out",
-        clean.to_str().unwrap(),
-        "--quiet",
-    ]);
+    ok(&synth_args(spec.to_str().unwrap(), &clean, &[]));
     let reference = manifest(&clean);
     assert_eq!(reference.len(), 8);
 
@@ -217,14 +178,7 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
     for finished_before_kill in [0usize, 1, 3, 5, 6] {
         let before = records(&killed);
         let mut child = binary()
-            .args([
-                "synth",
-                "--spec",
-                spec.to_str().unwrap(),
-                "--out",
-                killed.to_str().unwrap(),
-                "--quiet",
-            ])
+            .args(synth_args(spec.to_str().unwrap(), &killed, &[]))
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -256,14 +210,7 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
         partial_runs >= 1,
         "no kill landed in the middle of the simulations"
     );
-    let last = ok(&[
-        "synth",
-        "--spec",
-        spec.to_str().unwrap(),
-        "--out",
-        killed.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let last = ok(&synth_args(spec.to_str().unwrap(), &killed, &[]));
     eprintln!("{last}");
     ok(&["dataset", "verify", killed.to_str().unwrap()]);
     let resumed = manifest(&killed);
@@ -290,14 +237,7 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
     );
 
     // A re-run of a finished dataset simulates nothing.
-    let again = ok(&[
-        "synth",
-        "--spec",
-        spec.to_str().unwrap(),
-        "--out",
-        killed.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let again = ok(&synth_args(spec.to_str().unwrap(), &killed, &[]));
     assert!(again.contains("8 already done"), "{again}");
 
     // Verify catches a damaged recording; a re-run redoes exactly that sequence.
@@ -308,14 +248,7 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
     std::fs::write(&victim, bytes).unwrap();
     let err = fails(&["dataset", "verify", killed.to_str().unwrap()]);
     assert!(err.contains("checksum"), "{err}");
-    let redo = ok(&[
-        "synth",
-        "--spec",
-        spec.to_str().unwrap(),
-        "--out",
-        killed.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let redo = ok(&synth_args(spec.to_str().unwrap(), &killed, &[]));
     assert!(redo.contains("7 already done"), "{redo}");
     ok(&["dataset", "verify", killed.to_str().unwrap()]);
 }
@@ -329,14 +262,7 @@ fn shards_from_flags_slurm_and_kubernetes_merge_into_one_dataset() {
     let shared = dir.path().join("shared");
     for id in ["3", "4"] {
         let out = run_with(
-            &[
-                "synth",
-                "--spec",
-                s,
-                "--out",
-                shared.to_str().unwrap(),
-                "--quiet",
-            ],
+            &synth_args(s, &shared, &[]),
             &[
                 ("SLURM_ARRAY_TASK_ID", id),
                 ("SLURM_ARRAY_TASK_COUNT", "2"),
@@ -360,16 +286,7 @@ fn shards_from_flags_slurm_and_kubernetes_merge_into_one_dataset() {
     let (a, b) = (dir.path().join("k0"), dir.path().join("k1"));
     for (index, out) in [("0", &a), ("1", &b)] {
         let o = run_with(
-            &[
-                "synth",
-                "--spec",
-                s,
-                "--out",
-                out.to_str().unwrap(),
-                "--shard-count",
-                "2",
-                "--quiet",
-            ],
+            &synth_args(s, out, &["--shard-count", "2"]),
             &[("JOB_COMPLETION_INDEX", index)],
         );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -415,18 +332,7 @@ fn shards_from_flags_slurm_and_kubernetes_merge_into_one_dataset() {
     );
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--shard-count"));
-    assert!(
-        fails(&[
-            "synth",
-            "--spec",
-            s,
-            "--out",
-            a.to_str().unwrap(),
-            "--shard",
-            "2/2"
-        ])
-        .contains("out of range")
-    );
+    assert!(fails(&synth_args(s, &a, &["--shard", "2/2"])).contains("out of range"));
 }
 
 #[test]
@@ -458,23 +364,10 @@ fn bad_specs_get_errors_naming_the_key() {
     ];
     for (text, key) in cases {
         let spec = write_spec(dir.path(), &text);
-        let err = fails(&[
-            "synth",
-            "--spec",
-            spec.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ]);
+        let err = fails(&synth_args(spec.to_str().unwrap(), &out, &[]));
         assert!(err.contains(key), "error should name {key}: {err}");
         let _ = std::fs::remove_dir_all(&out);
     }
-    let missing = fails(&[
-        "synth",
-        "--spec",
-        "/no/such/spec.toml",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let missing = fails(&synth_args("/no/such/spec.toml", &out, &[]));
     assert!(missing.contains("/no/such/spec.toml"), "{missing}");
 }

@@ -2,33 +2,13 @@
 //! Chromium (Debian's `chromium` package; `.ci/run` installs it and sets
 //! `DIT_GARMENT_REQUIRE_BROWSER=1`, so there the browser check cannot be skipped).
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
+use common::{fails, ok};
 use serde_json::Value;
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dit-garment"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).to_string()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = run(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
 
 /// A short recording of the default skirt on the walking default body.
 fn recording(dir: &Path, name: &str, material: &str) -> PathBuf {

@@ -1,0 +1,61 @@
+//! Running the `dit-garment` binary as a user does, for the end-to-end tests.
+
+#![allow(dead_code)] // each test file uses its own subset
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+/// The binary, with library templates cached in a folder of the tests' own and no scheduler
+/// variables inherited (they would pick a shard).
+pub fn binary() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_dit-garment"));
+    c.env(
+        "DIT_GARMENT_CACHE",
+        std::env::temp_dir().join("dit-garment-test-cache"),
+    );
+    for v in [
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_COUNT",
+        "SLURM_ARRAY_TASK_MIN",
+        "JOB_COMPLETION_INDEX",
+    ] {
+        c.env_remove(v);
+    }
+    c
+}
+
+/// Runs the binary with extra environment variables.
+pub fn run_with(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = binary();
+    c.args(args);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("the binary runs")
+}
+
+/// Runs the binary, asserts success and returns its standard output.
+pub fn ok(args: &[&str]) -> String {
+    let out = run_with(args, &[]);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).to_string()
+}
+
+/// Runs the binary, asserts failure and returns its standard error.
+pub fn fails(args: &[&str]) -> String {
+    let out = run_with(args, &[]);
+    assert!(!out.status.success(), "{args:?} should fail");
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+/// A JSON file.
+pub fn json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
