@@ -66,6 +66,7 @@ pub struct Renderer {
     colour: Vec<[u8; 3]>,
     screen: Vec<[f32; 3]>,
     vertex_normals: Vec<P3>,
+    vertex_depths: Vec<f32>,
     coverage: Vec<usize>,
     image: RgbImage,
 }
@@ -93,6 +94,7 @@ impl Renderer {
             colour: vec![[0; 3]; n],
             screen: Vec::new(),
             vertex_normals: Vec::new(),
+            vertex_depths: Vec::new(),
             coverage: Vec::new(),
             image: RgbImage::new(width.max(1), height.max(1)),
         }
@@ -204,6 +206,9 @@ impl Renderer {
         let (top, bottom) = self.style.background;
         for (k, layer) in layers.iter().enumerate() {
             vertex_normals(layer, &mut self.vertex_normals);
+            self.vertex_depths.clear();
+            self.vertex_depths
+                .extend(layer.positions.iter().map(|&p| camera.to_camera(p)[2]));
             for i in 0..self.owner.len() {
                 if self.owner[i] as usize != k {
                     continue;
@@ -211,7 +216,7 @@ impl Renderer {
                 let tri = layer.triangles[self.triangle[i] as usize];
                 let [b1, b2] = self.bary[i];
                 let b = [1.0 - b1 - b2, b1, b2];
-                let z = tri.map(|v| camera.to_camera(layer.positions[v as usize])[2]);
+                let z = tri.map(|v| self.vertex_depths[v as usize]);
                 let q = [b[0] / z[0], b[1] / z[1], b[2] / z[2]];
                 let sum = q[0] + q[1] + q[2];
                 let q = q.map(|w| w / sum);
