@@ -340,12 +340,21 @@ fn store_spec(dir: &DatasetDir, spec: &DatasetSpec) -> Result<()> {
     })
 }
 
-/// Writes the manifest when every planned sequence has a record; returns the missing count.
-pub fn write_manifest(dir: &DatasetDir, planned: &[PlannedSequence]) -> Result<usize> {
+/// Writes the manifest when every planned sequence has a record (from `known`, this run's,
+/// else from the folder); returns the missing count.
+fn write_manifest(
+    dir: &DatasetDir,
+    planned: &[PlannedSequence],
+    known: &HashMap<String, ManifestRecord>,
+) -> Result<usize> {
     let mut records = Vec::with_capacity(planned.len());
     let mut missing = 0;
     for p in planned {
-        match finished_record(dir, &p.id) {
+        match known
+            .get(&p.id)
+            .cloned()
+            .or_else(|| finished_record(dir, &p.id))
+        {
             Some(r) => records.push(r),
             None => missing += 1,
         }
@@ -388,11 +397,17 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         .collect();
     let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
     let leftovers = remove_leftovers(&dir, &ids)?;
-    let todo: Vec<&PlannedSequence> = mine
-        .iter()
-        .copied()
-        .filter(|p| finished_record(&dir, &p.id).is_none())
-        .collect();
+    // Finished sequences (checked against their checksums once) and the rest.
+    let mut known = HashMap::new();
+    let mut todo: Vec<&PlannedSequence> = Vec::new();
+    for p in &mine {
+        match finished_record(&dir, &p.id) {
+            Some(r) => {
+                known.insert(p.id.clone(), r);
+            }
+            None => todo.push(p),
+        }
+    }
     println!(
         "synth '{}': {} sequences planned, shard {k}/{n} has {}, {} already done{}",
         spec.name,
@@ -452,44 +467,47 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let started = Instant::now();
     let frames_done = AtomicUsize::new(0);
     let failed = AtomicUsize::new(0);
-    pool.install(|| {
-        todo.par_iter().try_for_each(|p| -> Result<()> {
-            let record = synthesize(&ctx, p).with_context(|| format!("sequence {}", p.id))?;
-            write_json(&dir.record(&p.id), &record)?;
-            let done = frames_done.fetch_add(record.frames, Ordering::Relaxed) + record.frames;
-            if !record.ok() {
-                failed.fetch_add(1, Ordering::Relaxed);
-            }
-            // One line per sequence where no bar is drawn (logs of batch jobs), and for every
-            // failure.
-            if !record.ok() || (bar.is_hidden() && !args.quiet) {
-                let line = format!(
-                    "  {} {} ({} frames, {:.1} s){}",
-                    record.id,
-                    record.status,
-                    record.frames,
-                    record.wall_s,
-                    record
-                        .reason
-                        .as_ref()
-                        .map(|r| format!(": {r}"))
-                        .unwrap_or_default()
-                );
-                bar.suspend(|| eprintln!("{line}"));
-            }
-            bar.set_message(format!(
-                "{:.1} frames/s",
-                done as f64 / started.elapsed().as_secs_f64()
-            ));
-            bar.inc(1);
-            Ok(())
-        })
+    let made = pool.install(|| {
+        todo.par_iter()
+            .map(|p| -> Result<ManifestRecord> {
+                let record = synthesize(&ctx, p).with_context(|| format!("sequence {}", p.id))?;
+                write_json(&dir.record(&p.id), &record)?;
+                let done = frames_done.fetch_add(record.frames, Ordering::Relaxed) + record.frames;
+                if !record.ok() {
+                    failed.fetch_add(1, Ordering::Relaxed);
+                }
+                // One line per sequence where no bar is drawn (logs of batch jobs), and for every
+                // failure.
+                if !record.ok() || (bar.is_hidden() && !args.quiet) {
+                    let line = format!(
+                        "  {} {} ({} frames, {:.1} s){}",
+                        record.id,
+                        record.status,
+                        record.frames,
+                        record.wall_s,
+                        record
+                            .reason
+                            .as_ref()
+                            .map(|r| format!(": {r}"))
+                            .unwrap_or_default()
+                    );
+                    bar.suspend(|| eprintln!("{line}"));
+                }
+                bar.set_message(format!(
+                    "{:.1} frames/s",
+                    done as f64 / started.elapsed().as_secs_f64()
+                ));
+                bar.inc(1);
+                Ok(record)
+            })
+            .collect::<Result<Vec<_>>>()
     })?;
+    known.extend(made.into_iter().map(|r| (r.id.clone(), r)));
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
     let frames = frames_done.load(Ordering::Relaxed);
     let failed = failed.load(Ordering::Relaxed);
-    let missing = write_manifest(&dir, &planned)?;
+    let missing = write_manifest(&dir, &planned, &known)?;
     let summary = json!({
         "name": spec.name, "shard": [k, n], "planned": planned.len(), "shard_sequences": mine.len(),
         "simulated": todo.len(), "skipped": mine.len() - todo.len(), "failed": failed,
