@@ -1,5 +1,5 @@
 //! Contacts and their exact Signorini-Coulomb solve, independent of what produced them (an
-//! obstacle now, cloth-cloth proximity later).
+//! obstacle, or a triangle of the same cloth: see `self_contact.rs`).
 //!
 //! A contact constrains one cloth node's velocity v relative to the obstacle's velocity u at
 //! the contact point: (v - u).n >= g (g > 0 pushes a node that is too close or inside back
@@ -60,45 +60,72 @@ impl Contact {
     /// The contact impulse (kg m/s) for a node of `mass` whose residual momentum is `f`.
     #[inline]
     pub fn impulse(&self, f: Vec3, mass: f64) -> Vec3 {
-        let n = self.normal;
-        let local = f - mass * self.velocity;
-        let normal_part = local.dot(&n);
-        let slack = normal_part - mass * self.min_normal_velocity;
-        if slack >= 0.0 {
-            return Vec3::zeros(); // take-off
-        }
-        let r_n = -slack;
-        let mut r_t = -(local - normal_part * n); // stick
-        let limit = self.friction * r_n;
-        let norm_t = r_t.norm();
-        if norm_t > limit {
-            r_t *= if norm_t > 0.0 { limit / norm_t } else { 0.0 }; // slide
-        }
-        r_n * n + r_t
+        cone_impulse(
+            self.normal,
+            self.min_normal_velocity,
+            self.friction,
+            f - mass * self.velocity,
+            mass,
+        )
     }
 
     /// Alart-Curnier residual of impulse `r` and node velocity `v`, divided by the mass (m/s):
     /// zero exactly when (r, v) satisfy Signorini's condition and Coulomb's law.
     pub fn alart_curnier(&self, r: Vec3, v: Vec3, mass: f64) -> f64 {
-        let n = self.normal;
-        let w = v - self.velocity;
-        let w_n = w.dot(&n) - self.min_normal_velocity;
-        let w_t = w - w.dot(&n) * n;
-        let r_n = r.dot(&n);
-        let r_t = r - r_n * n;
-        let proj_n = (r_n - mass * w_n).max(0.0);
-        let phi_n = r_n - proj_n;
-        let trial = r_t - mass * w_t;
-        let limit = self.friction * proj_n;
-        let norm = trial.norm();
-        let proj_t = if norm > limit && norm > 0.0 {
-            trial * (limit / norm)
-        } else {
-            trial
-        };
-        let phi_t = r_t - proj_t;
-        (phi_n * phi_n + phi_t.norm_squared()).sqrt() / mass
+        alart_curnier(
+            self.normal,
+            self.min_normal_velocity,
+            self.friction,
+            r,
+            v - self.velocity,
+            mass,
+        )
     }
+}
+
+/// The impulse r of a contact with unit `normal`, bound g on the normal velocity and Coulomb
+/// coefficient `mu`, for a node of `mass` whose momentum relative to the obstacle is `local`
+/// (f - m u): take-off (r = 0), stick (velocity (local + r) / m = 0 tangentially and g along
+/// n) or slide (r_t on the rim of the cone). Body contacts and cloth-cloth pairs (with their
+/// reduced mass and relative momentum) share it.
+#[inline]
+pub(crate) fn cone_impulse(normal: Vec3, g: f64, mu: f64, local: Vec3, mass: f64) -> Vec3 {
+    let n = normal;
+    let normal_part = local.dot(&n);
+    let slack = normal_part - mass * g;
+    if slack >= 0.0 {
+        return Vec3::zeros(); // take-off
+    }
+    let r_n = -slack;
+    let mut r_t = -(local - normal_part * n); // stick
+    let limit = mu * r_n;
+    let norm_t = r_t.norm();
+    if norm_t > limit {
+        r_t *= if norm_t > 0.0 { limit / norm_t } else { 0.0 }; // slide
+    }
+    r_n * n + r_t
+}
+
+/// Alart-Curnier residual (m/s) of impulse `r` and relative velocity `w` for the contact of
+/// [`cone_impulse`].
+pub(crate) fn alart_curnier(normal: Vec3, g: f64, mu: f64, r: Vec3, w: Vec3, mass: f64) -> f64 {
+    let n = normal;
+    let w_n = w.dot(&n) - g;
+    let w_t = w - w.dot(&n) * n;
+    let r_n = r.dot(&n);
+    let r_t = r - r_n * n;
+    let proj_n = (r_n - mass * w_n).max(0.0);
+    let phi_n = r_n - proj_n;
+    let trial = r_t - mass * w_t;
+    let limit = mu * proj_n;
+    let norm = trial.norm();
+    let proj_t = if norm > limit && norm > 0.0 {
+        trial * (limit / norm)
+    } else {
+        trial
+    };
+    let phi_t = r_t - proj_t;
+    (phi_n * phi_n + phi_t.norm_squared()).sqrt() / mass
 }
 
 #[cfg(test)]

@@ -74,6 +74,25 @@ pub struct SolverParams {
     pub max_retries: usize,
     /// A vertex faster than this (m/s) counts as an explosion. Default 50.
     pub max_speed: f64,
+    /// Cloth-cloth contact (vertex against triangle of the same cloth). Off in this plain
+    /// default; garment scenes turn it on (`--no-self-contact` turns it off).
+    #[serde(default)]
+    pub self_contact: bool,
+    /// Gap self-contact keeps between a vertex and a triangle of the same cloth, m (two
+    /// layers rest this far apart; pairs within twice this are solved). Default 0.004.
+    #[serde(default = "default_self_contact_distance")]
+    pub self_contact_distance: f64,
+    /// Coulomb friction coefficient between touching layers of cloth. Default 0.3.
+    #[serde(default = "default_self_friction")]
+    pub self_friction: f64,
+}
+
+fn default_self_contact_distance() -> f64 {
+    0.004
+}
+
+fn default_self_friction() -> f64 {
+    0.3
 }
 
 impl Default for SolverParams {
@@ -89,6 +108,9 @@ impl Default for SolverParams {
             gravity: 9.81,
             max_retries: 3,
             max_speed: 50.0,
+            self_contact: false,
+            self_contact_distance: default_self_contact_distance(),
+            self_friction: default_self_friction(),
         }
     }
 }
@@ -110,6 +132,8 @@ impl SolverParams {
             ("air_damping", self.air_damping),
             ("gravity", self.gravity),
             ("max_speed", self.max_speed),
+            ("self_contact_distance", self.self_contact_distance),
+            ("self_friction", self.self_friction),
         ] {
             if !value.is_finite() || value < 0.0 {
                 return Err(Error::Setting(format!(
@@ -122,6 +146,11 @@ impl SolverParams {
                 "contact_offset ({} m) must be smaller than contact_tolerance ({} m)",
                 self.contact_offset, self.contact_tolerance
             )));
+        }
+        if self.self_contact && self.self_contact_distance == 0.0 {
+            return Err(Error::Setting(
+                "self_contact_distance must be positive when self-contact is on".into(),
+            ));
         }
         if self.max_speed == 0.0 {
             return Err(Error::Setting("max_speed must be positive".into()));

@@ -12,7 +12,7 @@ use std::time::Instant;
 use motions::{BlendIn, BodyModel, FramePose, Motion, PosedBody, canonical_a_pose};
 use serde::{Deserialize, Serialize};
 
-use crate::cloth::{ClothMesh, ClothState, Vec3};
+use crate::cloth::{ClothMesh, ClothState, Vec3, closest_on_triangle};
 use crate::error::{Error, Result};
 use crate::obstacles::{AnimatedMesh, Obstacle, Plane};
 use crate::params::{Material, SolverParams};
@@ -141,43 +141,6 @@ pub fn attach_to_body(
         out.push(attachment);
     }
     Ok(out)
-}
-
-/// Closest point on triangle (a, b, c) to p, with barycentric coordinates (Ericson, RTCD 5.1.5).
-fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (Vec3, [f64; 3]) {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (a, [1.0, 0.0, 0.0]);
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return (b, [0.0, 1.0, 0.0]);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return (a + ab * v, [1.0 - v, v, 0.0]);
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return (c, [0.0, 0.0, 1.0]);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return (a + ac * w, [1.0 - w, 0.0, w]);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (b + (c - b) * w, [0.0, 1.0 - w, w]);
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    (a + ab * v + ac * w, [1.0 - v - w, v, w])
 }
 
 fn cloth_setup(mesh: ClothMesh, material: Material, attachments: &[BodyAttachment]) -> ClothSetup {

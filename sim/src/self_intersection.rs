@@ -14,12 +14,18 @@ use crate::cloth::Vec3;
 
 /// Triangle pairs (sharing no vertex) that intersect.
 pub fn count_self_intersections(positions: &[Vec3], triangles: &[[u32; 3]]) -> usize {
+    self_intersecting_pairs(positions, triangles).len()
+}
+
+/// The triangle pairs (sharing no vertex) that intersect, each once, lower index first,
+/// sorted.
+pub fn self_intersecting_pairs(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
     let n = positions.len() as u32;
     let valid: Vec<usize> = (0..triangles.len())
         .filter(|&t| triangles[t].iter().all(|&i| i < n))
         .collect();
     if valid.len() < 2 {
-        return 0;
+        return Vec::new();
     }
     let boxes: Vec<(Vec3, Vec3)> = triangles
         .iter()
@@ -59,10 +65,10 @@ pub fn count_self_intersections(positions: &[Vec3], triangles: &[[u32; 3]]) -> u
     }
     entries.sort_unstable();
     let groups: Vec<&[(u64, u32)]> = entries.chunk_by(|a, b| a.0 == b.0).collect();
-    groups
+    let mut pairs: Vec<[u32; 2]> = groups
         .par_iter()
-        .map(|group| {
-            let mut hits = 0;
+        .flat_map_iter(|group| {
+            let mut hits = Vec::new();
             for (x, &(cell_key, a)) in group.iter().enumerate() {
                 for &(_, b) in &group[x + 1..] {
                     let (ta, tb) = (triangles[a as usize], triangles[b as usize]);
@@ -83,13 +89,15 @@ pub fn count_self_intersections(positions: &[Vec3], triangles: &[[u32; 3]]) -> u
                     let pa = ta.map(|i| positions[i as usize]);
                     let pb = tb.map(|i| positions[i as usize]);
                     if triangles_cross(&pa, &pb) {
-                        hits += 1;
+                        hits.push([a.min(b), a.max(b)]);
                     }
                 }
             }
             hits
         })
-        .sum()
+        .collect();
+    pairs.sort_unstable();
+    pairs
 }
 
 /// Whether two triangles intersect: an edge of either passes through the other.

@@ -2,9 +2,11 @@
 //! timed stages over plain data:
 //!
 //! 1. `predict`: v* = v + h g (pinned vertices get their prescribed velocity);
-//! 2. `detect`: obstacles move to the end of the step and report contacts at x + h v*;
-//! 3. `iterate`: local projections -> right-hand side -> per-node contact impulses ->
-//!    global solve with the constant factorization, until the residual is below tolerance;
+//! 2. `detect`: obstacles move to the end of the step and report contacts at x + h v*; with
+//!    self-contact on, vertices close to triangles of the same cloth become node pairs;
+//! 3. `iterate`: local projections -> right-hand side -> per-node contact impulses, then
+//!    cloth-cloth pair impulses -> global solve with the constant factorization, until the
+//!    residual is below tolerance;
 //! 4. `finish`: x = x + h v.
 //!
 //! Velocity-level backward Euler: P v = M v* + h sum_t w_t A_t^T (p_t - A_t x_n) + r with
@@ -18,10 +20,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::constraints::{Attachment, BendingRest, Constraints, ProjectionInputs, Seam, Spring};
-use crate::contact::Contact;
+use crate::contact::{Contact, alart_curnier, cone_impulse};
 use crate::error::{Error, Result};
 use crate::obstacles::{DetectionInput, Obstacle};
 use crate::params::{Material, SolverParams};
+use crate::self_contact::{SelfContact, SelfContactDetector};
 use crate::system::{GlobalSystem, Symbolic};
 
 /// Bending is lagged (left out of the factorized matrix) when it adds less than this share to
@@ -113,6 +116,8 @@ pub struct StepReport {
     pub deep_contacts: usize,
     /// Deepest penetration among the contacts at the start of the step, m (0 if none).
     pub max_depth: f64,
+    /// Cloth-cloth contact pairs in the step.
+    pub self_contacts: usize,
 }
 
 /// What one output frame did (several steps).
@@ -134,6 +139,9 @@ pub struct FrameReport {
     pub max_depth: f64,
     /// Retries with smaller steps this frame needed.
     pub retries: usize,
+    /// Largest cloth-cloth contact pair count of a step.
+    #[serde(default)]
+    pub self_contacts: usize,
 }
 
 struct Workspace {
@@ -149,6 +157,16 @@ struct Workspace {
     impulses: Vec<Vec3>,
     effective_mass: Vec<f64>,
     in_contact: Vec<bool>,
+    self_contacts: Vec<SelfContact>,
+    self_impulses: Vec<Vec3>,
+    /// Reduced mass of each pair.
+    self_mass: Vec<f64>,
+    /// Nodes (not pinned) in some pair, each once.
+    self_nodes: Vec<u32>,
+    /// Effective mass of the nodes in `self_nodes` (indexed by vertex).
+    node_mass: Vec<f64>,
+    /// m_j v_j - (P v)_j of the nodes in `self_nodes` (indexed by vertex).
+    node_free: Vec<Vec3>,
 }
 
 /// The solver: factorized system, constraints and workspace for one cloth.
@@ -166,6 +184,7 @@ pub struct Solver {
     seam_length_cap: f64,
     systems: BTreeMap<usize, GlobalSystem>,
     symbolic: [Option<Symbolic>; 2],
+    self_contact: Option<SelfContactDetector>,
     ws: Workspace,
     times: StageTimes,
 }
@@ -236,6 +255,11 @@ impl Solver {
             .map(|a| setup.mesh.rest()[a.vertex as usize])
             .collect();
         let terms = constraints.len();
+        let self_contact = params.self_contact.then(|| {
+            let mut links = setup.mesh.edges().to_vec();
+            links.extend(setup.seams.iter().map(|s| [s.a, s.b]));
+            SelfContactDetector::new(n, setup.mesh.triangles(), &links)
+        });
         let mut solver = Self {
             params,
             frame_dt,
@@ -249,6 +273,7 @@ impl Solver {
             seam_length_cap: f64::INFINITY,
             systems: BTreeMap::new(),
             symbolic: [None, None],
+            self_contact,
             ws: Workspace {
                 v_star: vec![Vec3::zeros(); n],
                 predicted: vec![Vec3::zeros(); n],
@@ -262,6 +287,12 @@ impl Solver {
                 impulses: Vec::new(),
                 effective_mass: Vec::new(),
                 in_contact: vec![false; n],
+                self_contacts: Vec::new(),
+                self_impulses: Vec::new(),
+                self_mass: Vec::new(),
+                self_nodes: Vec::new(),
+                node_mass: vec![0.0; n],
+                node_free: vec![Vec3::zeros(); n],
             },
             times: StageTimes::default(),
             setup,
@@ -408,6 +439,7 @@ impl Solver {
                 report.contacts = report.contacts.max(step.contacts);
                 report.deep_contacts += step.deep_contacts;
                 report.max_depth = report.max_depth.max(step.max_depth);
+                report.self_contacts = report.self_contacts.max(step.self_contacts);
                 if let Some(problem) = self.check(state) {
                     failed = Some(problem);
                     break;
@@ -517,6 +549,32 @@ impl Solver {
         for c in &ws.contacts {
             ws.in_contact[c.vertex as usize] = true;
         }
+        ws.self_contacts.clear();
+        ws.self_nodes.clear();
+        if let Some(detector) = &mut self.self_contact {
+            detector.detect(
+                &state.positions,
+                &ws.predicted,
+                h,
+                &self.params,
+                &mut ws.self_contacts,
+            );
+            ws.self_contacts.retain(|c| {
+                !(pinned[c.vertex as usize] && c.triangle.iter().all(|&i| pinned[i as usize]))
+            });
+            for c in &ws.self_contacts {
+                let nodes = std::iter::once(c.vertex).chain(c.triangle);
+                ws.self_nodes.extend(nodes.filter(|&j| !pinned[j as usize]));
+            }
+            ws.self_nodes.sort_unstable();
+            ws.self_nodes.dedup();
+            for &j in &ws.self_nodes {
+                ws.in_contact[j as usize] = true;
+            }
+        }
+        ws.self_impulses.clear();
+        ws.self_impulses
+            .resize(ws.self_contacts.len(), Vec3::zeros());
         self.times.detect += started.elapsed();
     }
 
@@ -543,6 +601,7 @@ impl Solver {
         let n = state.positions.len();
         let mut report = StepReport {
             contacts: self.ws.contacts.len(),
+            self_contacts: self.ws.self_contacts.len(),
             ..StepReport::default()
         };
         for c in &self.ws.contacts {
@@ -576,6 +635,29 @@ impl Solver {
                 let m = self.masses[j] + COUPLING_SHARE * system.free_coupling(j, &ws.in_contact);
                 ws.effective_mass.push(m);
             }
+            for &j in &ws.self_nodes {
+                let j = j as usize;
+                ws.node_mass[j] =
+                    self.masses[j] + COUPLING_SHARE * system.free_coupling(j, &ws.in_contact);
+            }
+            let (node_mass, pinned) = (&ws.node_mass, &self.pinned);
+            let inverse = |j: u32| {
+                if pinned[j as usize] {
+                    0.0
+                } else {
+                    1.0 / node_mass[j as usize]
+                }
+            };
+            ws.self_mass.clear();
+            ws.self_mass.extend(ws.self_contacts.iter().map(|c| {
+                let other: f64 = c
+                    .triangle
+                    .iter()
+                    .zip(c.weights)
+                    .map(|(&i, w)| w * w * inverse(i))
+                    .sum();
+                1.0 / (inverse(c.vertex) + other)
+            }));
         }
         self.times.local += started.elapsed();
 
@@ -583,6 +665,9 @@ impl Solver {
             let lag = self.systems[&substeps].lags_bending();
             self.local_step(state, h, lag);
             self.contact_step(substeps);
+            if !self.ws.self_contacts.is_empty() {
+                self.self_contact_step(substeps);
+            }
             let started = Instant::now();
             for i in 0..n {
                 if self.pinned[i] {
@@ -602,6 +687,16 @@ impl Solver {
                     .fold(0.0, f64::max);
             for ((c, r), m) in ws.contacts.iter().zip(&ws.impulses).zip(&ws.effective_mass) {
                 residual = residual.max(c.alart_curnier(*r, ws.v_next[c.vertex as usize], *m));
+            }
+            for ((c, r), m) in ws
+                .self_contacts
+                .iter()
+                .zip(&ws.self_impulses)
+                .zip(&ws.self_mass)
+            {
+                let w = ws.v_next[c.vertex as usize] - point_velocity(c, &ws.v_next);
+                let ac = alart_curnier(c.normal, c.min_normal_velocity, c.friction, *r, w, *m);
+                residual = residual.max(ac);
             }
             std::mem::swap(&mut self.ws.v, &mut self.ws.v_next);
             self.times.contact += started.elapsed();
@@ -681,6 +776,9 @@ impl Solver {
         let started = Instant::now();
         let system = &self.systems[&substeps];
         let ws = &mut self.ws;
+        for (c, r) in ws.self_contacts.iter().zip(&ws.self_impulses) {
+            apply_pair(&mut ws.rhs, c, *r);
+        }
         let mut k = 0;
         while k < ws.contacts.len() {
             let j = ws.contacts[k].vertex as usize;
@@ -699,5 +797,68 @@ impl Solver {
             ws.rhs[j] += total;
         }
         self.times.contact += started.elapsed();
+    }
+
+    /// Cloth-cloth pairs, after the body contacts: each pair is a contact of vertex p with
+    /// the point B = sum_i w_i x_i of a triangle, solved on their relative motion with the
+    /// reduced mass m_p m_B / (m_p + m_B) (1 / m_B = sum_i w_i^2 / m_i, pinned corners
+    /// weigh nothing) and the same cone projection as body contacts; +r goes to p and -w_i r
+    /// to the corners. Pairs are visited one after the other and each sees the impulses of
+    /// those before it (Gauss-Seidel), so chains of stacked contacts converge; every pair's
+    /// impulse is under-relaxed like a body contact's.
+    ///
+    /// Called with the right-hand side holding every pair's impulse from the last iteration
+    /// (added by `contact_step` before the body contacts see it).
+    fn self_contact_step(&mut self, substeps: usize) {
+        let started = Instant::now();
+        let system = &self.systems[&substeps];
+        let ws = &mut self.ws;
+        for &j in &ws.self_nodes {
+            let j = j as usize;
+            ws.node_free[j] = ws.node_mass[j] * ws.v[j] - system.row_times(j, &ws.v);
+        }
+        let pinned = &self.pinned;
+        for k in 0..ws.self_contacts.len() {
+            let c = ws.self_contacts[k];
+            let old = ws.self_impulses[k];
+            // Velocity of node j once the residual momentum acts on its effective mass,
+            // without this pair's impulse `share` (pinned nodes keep their velocity).
+            let free_velocity = |j: u32, share: Vec3| {
+                let j = j as usize;
+                if pinned[j] {
+                    ws.v[j]
+                } else {
+                    (ws.rhs[j] - share + ws.node_free[j]) / ws.node_mass[j]
+                }
+            };
+            let mut point = Vec3::zeros();
+            for (&i, w) in c.triangle.iter().zip(c.weights) {
+                point += w * free_velocity(i, -w * old);
+            }
+            let mass = ws.self_mass[k];
+            let relative = mass * (free_velocity(c.vertex, old) - point);
+            let target = cone_impulse(c.normal, c.min_normal_velocity, c.friction, relative, mass);
+            let new = old + IMPULSE_RELAXATION * (target - old);
+            ws.self_impulses[k] = new;
+            apply_pair(&mut ws.rhs, &c, new - old);
+        }
+        self.times.contact += started.elapsed();
+    }
+}
+
+/// Velocity of the point of a pair's triangle below its vertex.
+fn point_velocity(c: &SelfContact, v: &[Vec3]) -> Vec3 {
+    c.triangle
+        .iter()
+        .zip(c.weights)
+        .map(|(&i, w)| w * v[i as usize])
+        .sum()
+}
+
+/// Adds a pair's impulse `r` to the right-hand side: +r at the vertex, -w_i r at the corners.
+fn apply_pair(rhs: &mut [Vec3], c: &SelfContact, r: Vec3) {
+    rhs[c.vertex as usize] += r;
+    for (&i, w) in c.triangle.iter().zip(c.weights) {
+        rhs[i as usize] -= w * r;
     }
 }

@@ -1,0 +1,324 @@
+//! Cloth-cloth contact: which vertices are about to touch a triangle of the same cloth, and
+//! the frictional node-pair constraints they become.
+//!
+//! Detection runs once per step. A bounding volume hierarchy (parry3d's `Bvh`, refitted every
+//! step and rebuilt every [`REBUILD_STEPS`] steps) holds every triangle's box over its start
+//! and predicted positions, widened by the detection band; every vertex's box over its own
+//! start and predicted positions is queried against it. A candidate (vertex p, triangle t) is
+//! kept when p is neither a corner of t nor a neighbour (by an edge or a seam) of one, p lies
+//! over t or at most the kept distance beside it (so layers meeting edge to edge, as at a
+//! folded strip's sides, are held too), and p is, or is predicted to come, closer to t's
+//! plane than the band.
+//!
+//! A kept pair constrains the relative velocity of p and of its closest point on t,
+//! (v_p - sum_i w_i v_i).n >= g, so that the gap along t's normal at the end of the step is at
+//! least [`SolverParams::self_contact_distance`]; the solver treats it like a body contact
+//! whose obstacle is that point (see `Solver::self_contact_step`).
+
+use parry3d::bounding_volume::Aabb;
+use parry3d::math::Vector;
+use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
+use rayon::prelude::*;
+
+use crate::cloth::{Vec3, closest_on_triangle};
+use crate::params::SolverParams;
+
+/// Steps between full rebuilds of the hierarchy (refits in between keep it valid but let its
+/// boxes grow looser as the cloth deforms).
+const REBUILD_STEPS: usize = 30;
+
+/// The detection band is this many times the kept distance: pairs a little farther apart are
+/// solved too (they take off at once when they are not approaching).
+const BAND_FACTOR: f64 = 2.0;
+
+/// One cloth vertex against one triangle of the same cloth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SelfContact {
+    /// The vertex.
+    pub vertex: u32,
+    /// The triangle's corners.
+    pub triangle: [u32; 3],
+    /// Barycentric weights of the point of the triangle below the vertex.
+    pub weights: [f64; 3],
+    /// Unit normal of the triangle, on the vertex's side.
+    pub normal: Vec3,
+    /// Lower bound g on the relative normal velocity, m/s.
+    pub min_normal_velocity: f64,
+    /// Coulomb friction coefficient between the layers.
+    pub friction: f64,
+    /// Gap along the normal at the start of the step, m.
+    pub distance: f64,
+}
+
+/// Finds self-contacts of one cloth mesh, step after step.
+pub(crate) struct SelfContactDetector {
+    triangles: Vec<[u32; 3]>,
+    neighbour_ptr: Vec<usize>,
+    neighbours: Vec<u32>,
+    boxes: Vec<Aabb>,
+    bvh: Option<Bvh>,
+    workspace: BvhWorkspace,
+    steps_since_build: usize,
+}
+
+fn to_parry(p: &Vec3) -> Vector {
+    Vector::new(p.x as f32, p.y as f32, p.z as f32)
+}
+
+fn bounds(points: impl IntoIterator<Item = Vec3>, margin: f64) -> Aabb {
+    let mut lo = Vec3::repeat(f64::INFINITY);
+    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
+    for p in points {
+        lo = lo.inf(&p);
+        hi = hi.sup(&p);
+    }
+    let m = Vec3::repeat(margin);
+    Aabb::new(to_parry(&(lo - m)), to_parry(&(hi + m)))
+}
+
+impl SelfContactDetector {
+    /// A detector for `triangles` over `num_vertices` vertices; `links` are the mesh edges
+    /// plus any seams: vertices they join never touch each other's triangles.
+    pub fn new(num_vertices: usize, triangles: &[[u32; 3]], links: &[[u32; 2]]) -> Self {
+        let mut adjacency = vec![Vec::new(); num_vertices];
+        for &[a, b] in links {
+            adjacency[a as usize].push(b);
+            adjacency[b as usize].push(a);
+        }
+        let mut neighbour_ptr = Vec::with_capacity(num_vertices + 1);
+        let mut neighbours = Vec::new();
+        neighbour_ptr.push(0);
+        for mut list in adjacency {
+            list.sort_unstable();
+            list.dedup();
+            neighbours.extend(list);
+            neighbour_ptr.push(neighbours.len());
+        }
+        Self {
+            triangles: triangles.to_vec(),
+            neighbour_ptr,
+            neighbours,
+            boxes: Vec::with_capacity(triangles.len()),
+            bvh: None,
+            workspace: BvhWorkspace::default(),
+            steps_since_build: 0,
+        }
+    }
+
+    fn is_neighbour(&self, a: u32, b: u32) -> bool {
+        let list =
+            &self.neighbours[self.neighbour_ptr[a as usize]..self.neighbour_ptr[a as usize + 1]];
+        list.binary_search(&b).is_ok()
+    }
+
+    /// Whether vertex `p` is a corner of `t` or joined to one by an edge or a seam.
+    fn excluded(&self, p: u32, t: [u32; 3]) -> bool {
+        t.iter().any(|&c| c == p || self.is_neighbour(p, c))
+    }
+
+    /// Replaces `out` with the self-contacts of a step of length `h` from `positions` to
+    /// `predicted` (x + h v*). Contacts come in vertex order.
+    pub fn detect(
+        &mut self,
+        positions: &[Vec3],
+        predicted: &[Vec3],
+        h: f64,
+        params: &SolverParams,
+        out: &mut Vec<SelfContact>,
+    ) {
+        out.clear();
+        let band = BAND_FACTOR * params.self_contact_distance;
+        self.boxes.clear();
+        self.boxes.extend(self.triangles.iter().map(|t| {
+            bounds(
+                t.iter()
+                    .flat_map(|&i| [positions[i as usize], predicted[i as usize]]),
+                band,
+            )
+        }));
+        match &mut self.bvh {
+            Some(bvh) if self.steps_since_build < REBUILD_STEPS => {
+                for (t, aabb) in self.boxes.iter().enumerate() {
+                    bvh.insert_or_update_partially(*aabb, t as u32, 0.0);
+                }
+                bvh.refit(&mut self.workspace);
+                self.steps_since_build += 1;
+            }
+            _ => {
+                self.bvh = Some(Bvh::from_leaves(BvhBuildStrategy::Binned, &self.boxes));
+                self.steps_since_build = 0;
+            }
+        }
+        let bvh = self.bvh.as_ref().expect("hierarchy built above");
+        let this = &*self;
+        let found: Vec<Vec<SelfContact>> = (0..positions.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|p| {
+                let query = bounds([positions[p], predicted[p]], 0.0);
+                let mut mine: Vec<SelfContact> = Vec::new();
+                for t in bvh.intersect_aabb(&query) {
+                    let triangle = this.triangles[t as usize];
+                    if this.excluded(p as u32, triangle) {
+                        continue;
+                    }
+                    let Some(c) = pair(p as u32, triangle, positions, predicted, h, band, params)
+                    else {
+                        continue;
+                    };
+                    // A closest point on an edge or corner is found once per triangle
+                    // around it: keep one.
+                    let duplicate = mine.iter().any(|d| {
+                        (d.normal - c.normal).norm_squared() < 1e-18
+                            && (d.distance - c.distance).abs() < 1e-12
+                    });
+                    if !duplicate {
+                        mine.push(c);
+                    }
+                }
+                mine.sort_by_key(|c| c.triangle);
+                mine
+            })
+            .collect();
+        out.extend(found.into_iter().flatten());
+    }
+}
+
+/// The constraint of vertex `p` against `triangle`, if `p` is (or is predicted to come)
+/// within `band` of the triangle's closest point.
+fn pair(
+    p: u32,
+    triangle: [u32; 3],
+    positions: &[Vec3],
+    predicted: &[Vec3],
+    h: f64,
+    band: f64,
+    params: &SolverParams,
+) -> Option<SelfContact> {
+    let [a, b, c] = triangle.map(|i| positions[i as usize]);
+    let x = positions[p as usize];
+    let (closest, weights) = closest_on_triangle(x, a, b, c);
+    // The normal is the face normal on the vertex's side, also for a vertex a little beside
+    // the triangle (layers meeting edge to edge, as at a folded strip's sides): a normal
+    // from the closest edge to the vertex would tilt and, linearized, brake a layer sliding
+    // over an edge.
+    let face = (b - a).cross(&(c - a)).try_normalize(1e-30)?;
+    let offset = x - closest;
+    let along = offset.dot(&face);
+    let aside = (offset - along * face).norm();
+    let (normal, distance) = if aside <= along.abs() {
+        (if along >= 0.0 { face } else { -face }, along.abs())
+    } else {
+        (offset / offset.norm(), offset.norm())
+    };
+    let below = |q: &[Vec3]| -> Vec3 {
+        triangle
+            .iter()
+            .zip(weights)
+            .map(|(&i, w)| w * q[i as usize])
+            .sum()
+    };
+    let predicted_gap = (predicted[p as usize] - below(predicted)).dot(&normal);
+    if distance.min(predicted_gap) >= band {
+        return None;
+    }
+    let needed = (params.self_contact_distance - distance) / h;
+    Some(SelfContact {
+        vertex: p,
+        triangle,
+        weights,
+        normal,
+        min_normal_velocity: needed.min(params.max_push_out_speed),
+        friction: params.self_friction,
+        distance,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloth::ClothMesh;
+
+    fn params() -> SolverParams {
+        SolverParams {
+            self_contact: true,
+            ..SolverParams::default()
+        }
+    }
+
+    /// Two 5x5 sheets of 10 cm, the second `gap` above the first.
+    fn two_sheets(gap: f64) -> (Vec<Vec3>, Vec<[u32; 3]>, Vec<[u32; 2]>) {
+        let lower = ClothMesh::grid(5, 0.1, 0.0).unwrap();
+        let mut positions = lower.rest().to_vec();
+        positions.extend(lower.rest().iter().map(|p| p + Vec3::new(0.0, gap, 0.0)));
+        let n = lower.num_vertices() as u32;
+        let mut triangles = lower.triangles().to_vec();
+        triangles.extend(lower.triangles().iter().map(|t| t.map(|i| i + n)));
+        let mut edges = lower.edges().to_vec();
+        edges.extend(lower.edges().iter().map(|e| e.map(|i| i + n)));
+        (positions, triangles, edges)
+    }
+
+    #[test]
+    fn layers_closer_than_the_band_touch_and_a_flat_sheet_does_not() {
+        let params = params();
+        let (positions, triangles, edges) = two_sheets(0.005);
+        let mut detector = SelfContactDetector::new(positions.len(), &triangles, &edges);
+        let mut out = Vec::new();
+        detector.detect(&positions, &positions, 0.01, &params, &mut out);
+        // Every vertex of each sheet is over (or on the edge of) the other sheet.
+        let vertices: std::collections::BTreeSet<u32> = out.iter().map(|c| c.vertex).collect();
+        assert_eq!(vertices.len(), 50, "{out:?}");
+        for c in &out {
+            assert!((c.distance - 0.005).abs() < 1e-12);
+            let upper = c.vertex >= 25;
+            assert_eq!(c.normal.y > 0.0, upper, "normal points to the vertex");
+            assert!(c.triangle.iter().all(|&i| (i >= 25) != upper));
+            // Gap 5 mm, kept 3 mm: may approach at 2 mm per step.
+            let expected = (params.self_contact_distance - 0.005) / 0.01;
+            assert!((c.min_normal_velocity - expected).abs() < 1e-12);
+        }
+        // Far apart: nothing; one sheet alone: nothing (neighbours excluded).
+        let (positions, ..) = two_sheets(0.05);
+        detector.detect(&positions, &positions, 0.01, &params, &mut out);
+        assert!(out.is_empty());
+    }
+
+    #[test]
+    fn a_vertex_predicted_to_cross_is_caught() {
+        let params = params();
+        let (positions, triangles, edges) = two_sheets(0.03);
+        let mut predicted = positions.clone();
+        // The upper sheet is predicted to fall 5 cm, through the lower one.
+        for p in &mut predicted[25..] {
+            p.y -= 0.05;
+        }
+        let mut detector = SelfContactDetector::new(positions.len(), &triangles, &edges);
+        let mut out = Vec::new();
+        detector.detect(&positions, &predicted, 0.01, &params, &mut out);
+        assert!(out.iter().any(|c| c.vertex >= 25 && c.normal.y > 0.0));
+        // Refitted on the next step, the sheets now 6 mm apart and still: found; 3 cm apart
+        // and still: nothing.
+        let (close, ..) = two_sheets(0.006);
+        detector.detect(&close, &close, 0.01, &params, &mut out);
+        let vertices: std::collections::BTreeSet<u32> = out.iter().map(|c| c.vertex).collect();
+        assert_eq!(vertices.len(), 50);
+        detector.detect(&positions, &positions, 0.01, &params, &mut out);
+        assert!(out.is_empty());
+    }
+
+    #[test]
+    fn neighbours_and_seams_are_excluded() {
+        // Two layers 2 mm apart touch; once seams join each vertex to the one above it, every
+        // vertex projects onto a corner it is linked to and nothing is left.
+        let (positions, triangles, mut edges) = two_sheets(0.002);
+        let mut detector = SelfContactDetector::new(positions.len(), &triangles, &edges);
+        let mut out = Vec::new();
+        detector.detect(&positions, &positions, 0.01, &params(), &mut out);
+        assert!(!out.is_empty());
+        edges.extend((0..25).map(|i| [i, i + 25]));
+        let mut detector = SelfContactDetector::new(positions.len(), &triangles, &edges);
+        detector.detect(&positions, &positions, 0.01, &params(), &mut out);
+        assert!(out.is_empty(), "{out:?}");
+    }
+}
