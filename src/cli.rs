@@ -159,6 +159,15 @@ pub struct SceneArgs {
     /// Maximum solver iterations per substep.
     #[arg(long, default_value_t = 8)]
     pub iterations: usize,
+    /// Turns cloth-cloth contact off (it is on for garment scenes).
+    #[arg(long)]
+    pub no_self_contact: bool,
+    /// Gap self-contact keeps between layers of the garment, m.
+    #[arg(long, default_value_t = 0.004)]
+    pub self_contact_distance: f64,
+    /// Coulomb friction coefficient between layers of the garment.
+    #[arg(long, default_value_t = 0.3)]
+    pub self_friction: f64,
 }
 
 #[derive(Debug, Args)]
@@ -201,6 +210,9 @@ pub struct DrapeBenchArgs {
     /// Iterations per substep.
     #[arg(long, default_value_t = 5)]
     pub iterations: usize,
+    /// Turns cloth-cloth contact on (off by default: the peers' scene has none).
+    #[arg(long)]
+    pub self_contact: bool,
     /// Folder for the final vertices (`final_n<N>.npy`, z-up, grid order i*n+j as the peers)
     /// and the result JSON.
     #[arg(long, default_value = "out/drape-bench")]

@@ -421,6 +421,7 @@ impl Solver {
     ) -> Result<FrameReport> {
         let saved = state.clone();
         let mut reason = String::new();
+
         for retry in 0..=self.params.max_retries {
             let substeps = self.params.substeps << retry;
             self.system_for(substeps)?;

@@ -93,3 +93,7 @@ fn cantilever() {
 fn hanging_chain() {
     check("hanging_chain");
 }
+#[test]
+fn self_contact() {
+    check("self_contact");
+}

@@ -33,15 +33,20 @@ fn load(dir: &DatasetDir) -> Result<(DatasetSpec, Vec<PlannedSequence>, Vec<Mani
     Ok((spec, planned, records))
 }
 
-/// Largest per-frame values in a recording's statistics: penetration, vertices inside, stretch.
-fn recorded_extremes(recording: &Recording) -> (f64, usize, f64) {
-    recording.stats.iter().fold((0.0, 0, 0.0), |(p, v, s), f| {
-        (
-            f64::max(p, f.max_penetration_m),
-            v.max(f.vertices_inside),
-            f64::max(s, f.max_edge_stretch),
-        )
-    })
+/// Largest per-frame values in a recording's statistics: penetration, vertices inside,
+/// stretch, self-intersections.
+fn recorded_extremes(recording: &Recording) -> (f64, usize, f64, usize) {
+    recording
+        .stats
+        .iter()
+        .fold((0.0, 0, 0.0, 0), |(p, v, s, x), f| {
+            (
+                f64::max(p, f.max_penetration_m),
+                v.max(f.vertices_inside),
+                f64::max(s, f.max_edge_stretch),
+                x.max(f.self_intersections),
+            )
+        })
 }
 
 /// Checks one record against its plan entry, its recording and the gates; returns problems.
@@ -112,19 +117,24 @@ fn check_record(
     if meta.seed != Some(r.seed) || meta.betas != r.betas {
         problem("recording's seed or shape differs from the record".into());
     }
-    let (pen, inside, stretch) = recorded_extremes(&recording);
+    let (pen, inside, stretch, crossings) = recorded_extremes(&recording);
     let g = &last.gates;
     if !last.gates.timed_out
         && ((pen - g.max_penetration_m).abs() > 1e-9
             || inside != g.max_verts_inside
-            || (stretch - g.max_edge_stretch).abs() > 1e-9)
+            || (stretch - g.max_edge_stretch).abs() > 1e-9
+            || crossings != g.max_self_intersections)
     {
         problem("gate values differ from the recording's statistics".into());
     }
     if r.ok() {
         let gates = &spec.gates;
         let allowed = (gates.max_inside_fraction * r.vertices as f64).floor() as usize;
-        if pen > gates.max_penetration_m || inside > allowed || stretch > gates.max_edge_stretch {
+        if pen > gates.max_penetration_m
+            || inside > allowed
+            || stretch > gates.max_edge_stretch
+            || crossings > gates.max_self_intersections
+        {
             problem("marked ok but its statistics break the spec's gates".into());
         }
     }

@@ -13,6 +13,7 @@ pub fn run(args: &DrapeBenchArgs) -> Result<()> {
     let mut bench = DrapeBench::new(args.n);
     bench.params.substeps = args.substeps;
     bench.params.max_iterations = args.iterations;
+    bench.params.self_contact = args.self_contact;
     let r = bench.run()?;
     let m = &r.measures;
     let result = json!({
@@ -20,6 +21,7 @@ pub fn run(args: &DrapeBenchArgs) -> Result<()> {
         "n": r.n, "t_sim_2s_wall_s": r.t_sim_2s_wall_s, "realtime_factor": r.realtime_factor,
         "setup_s": r.setup_s, "substeps_per_frame": r.substeps_per_frame,
         "iterations_per_substep": r.max_iterations, "mean_iterations": r.mean_iterations,
+        "self_contact": args.self_contact,
         "finite": m.finite, "verts_inside_sphere": m.verts_inside_sphere,
         "min_dist_to_sphere_surface_m": m.min_dist_to_sphere_surface_m,
         "max_edge_stretch": m.max_edge_stretch, "p99_edge_stretch": m.p99_edge_stretch,

@@ -47,6 +47,9 @@ pub fn prepare_with(
     let params = SolverParams {
         substeps: args.substeps,
         max_iterations: args.iterations,
+        self_contact: !args.no_self_contact,
+        self_contact_distance: args.self_contact_distance,
+        self_friction: args.self_friction,
         ..SolverParams::default()
     };
     let scene = Scene {

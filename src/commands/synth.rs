@@ -243,6 +243,9 @@ fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
             settle_frames: spec.sequence.settle_frames,
             substeps,
             iterations,
+            no_self_contact: !spec.solver.self_contact,
+            self_contact_distance: spec.solver.self_contact_distance,
+            self_friction: spec.solver.self_friction,
         };
         let attempt_started = Instant::now();
         let prepared = prepare_with(

@@ -23,8 +23,7 @@ pub struct GateResult {
     pub max_verts_inside: usize,
     /// Largest edge stretch.
     pub max_edge_stretch: f64,
-    /// Most crossing garment triangle pairs in one frame (recorded; not a gate until the
-    /// engine has self-contact).
+    /// Most crossing garment triangle pairs in one frame.
     #[serde(default)]
     pub max_self_intersections: usize,
     /// The attempt ran past the time limit.
@@ -60,6 +59,12 @@ impl GateResult {
             failed.push(format!(
                 "edge stretch {:.3} > {:.3}",
                 summary.max_edge_stretch, gates.max_edge_stretch
+            ));
+        }
+        if summary.max_self_intersections > gates.max_self_intersections {
+            failed.push(format!(
+                "{} self-intersections > {}",
+                summary.max_self_intersections, gates.max_self_intersections
             ));
         }
         GateResult {

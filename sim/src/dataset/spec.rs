@@ -114,13 +114,23 @@ pub struct SolverSpec {
     pub substeps: usize,
     /// Maximum iterations per substep.
     pub iterations: usize,
+    /// Cloth-cloth contact.
+    pub self_contact: bool,
+    /// Gap self-contact keeps between layers, m.
+    pub self_contact_distance: f64,
+    /// Coulomb friction coefficient between layers.
+    pub self_friction: f64,
 }
 
 impl Default for SolverSpec {
     fn default() -> Self {
+        let plain = crate::SolverParams::default();
         Self {
             substeps: 2,
             iterations: 8,
+            self_contact: true,
+            self_contact_distance: plain.self_contact_distance,
+            self_friction: plain.self_friction,
         }
     }
 }
@@ -135,6 +145,9 @@ pub struct GateSpec {
     pub max_inside_fraction: f64,
     /// Largest edge length / rest length.
     pub max_edge_stretch: f64,
+    /// Most crossing garment triangle pairs in one frame (GarmentCode rejects drapes with
+    /// more than 300 self-intersections; so do we, per frame).
+    pub max_self_intersections: usize,
     /// Wall-clock limit per attempt, s.
     pub timeout_s: f64,
     /// Attempts after a failed one, each with the retry solver settings.
@@ -151,6 +164,7 @@ impl Default for GateSpec {
             max_penetration_m: 0.02,
             max_inside_fraction: 0.05,
             max_edge_stretch: 1.5,
+            max_self_intersections: 300,
             timeout_s: 900.0,
             retries: 1,
             retry_substeps: 4,
@@ -290,6 +304,18 @@ impl DatasetSpec {
             if !(1..=200).contains(&n) {
                 return Err(format!("{key} = {n} is outside 1..=200"));
             }
+        }
+        if !(v.self_contact_distance > 0.0 && v.self_contact_distance <= 0.05) {
+            return Err(format!(
+                "solver.self_contact_distance = {} m is outside (0, 0.05]",
+                v.self_contact_distance
+            ));
+        }
+        if !(0.0..=2.0).contains(&v.self_friction) {
+            return Err(format!(
+                "solver.self_friction = {} is outside [0, 2]",
+                v.self_friction
+            ));
         }
         for (key, x) in [
             ("gates.max_penetration_m", g.max_penetration_m),

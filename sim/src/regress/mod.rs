@@ -4,6 +4,8 @@
 
 use serde::Serialize;
 
+pub mod self_contact;
+
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::constraints::{BendingRest, Seam};
 use crate::drape_bench::DrapeBench;
@@ -12,7 +14,7 @@ use crate::obstacles::{Obstacle, Plane};
 use crate::params::{Material, SolverParams};
 use crate::solver::{ClothSetup, Solver};
 
-const G: f64 = 9.81;
+pub(crate) const G: f64 = 9.81;
 
 /// One scenario's result.
 #[derive(Debug, Clone, Serialize)]
@@ -110,6 +112,10 @@ pub fn scenarios() -> Vec<Scenario> {
         Scenario {
             name: "determinism",
             run: determinism,
+        },
+        Scenario {
+            name: "self_contact",
+            run: self_contact::self_contact,
         },
         Scenario {
             name: "golden",
