@@ -72,6 +72,7 @@ pub(crate) struct SelfContactDetector {
     neighbour_ptr: Vec<usize>,
     neighbours: Vec<u32>,
     boxes: Vec<Aabb>,
+    vertex_boxes: Vec<(Vec3, Vec3)>,
     bvh: Option<Bvh>,
     workspace: BvhWorkspace,
     steps_since_build: usize,
@@ -83,17 +84,6 @@ pub(crate) struct SelfContactDetector {
 
 fn to_parry(p: &Vec3) -> Vector {
     Vector::new(p.x as f32, p.y as f32, p.z as f32)
-}
-
-fn bounds(points: impl IntoIterator<Item = Vec3>, margin: f64) -> Aabb {
-    let mut lo = Vec3::repeat(f64::INFINITY);
-    let mut hi = Vec3::repeat(f64::NEG_INFINITY);
-    for p in points {
-        lo = lo.inf(&p);
-        hi = hi.sup(&p);
-    }
-    let m = Vec3::repeat(margin);
-    Aabb::new(to_parry(&(lo - m)), to_parry(&(hi + m)))
 }
 
 impl SelfContactDetector {
@@ -119,6 +109,7 @@ impl SelfContactDetector {
             neighbour_ptr,
             neighbours,
             boxes: Vec::with_capacity(triangles.len()),
+            vertex_boxes: Vec::with_capacity(num_vertices),
             bvh: None,
             workspace: BvhWorkspace::default(),
             steps_since_build: 0,
@@ -151,22 +142,28 @@ impl SelfContactDetector {
         out.clear();
         let band = BAND_FACTOR * params.self_contact_distance;
         let max_sweep = MAX_SWEEP_FACTOR * params.self_contact_distance;
-        let swept = |i: usize| {
-            let motion = predicted[i] - positions[i];
-            let length = motion.norm();
-            let end = if length > max_sweep {
-                positions[i] + motion * (max_sweep / length)
-            } else {
-                predicted[i]
-            };
-            [positions[i], end]
-        };
+        // Each vertex's box over its start and (capped) predicted position, once.
+        self.vertex_boxes.clear();
+        self.vertex_boxes
+            .par_extend(positions.par_iter().zip(predicted).map(|(x, p)| {
+                let motion = p - x;
+                let length = motion.norm();
+                let end = if length > max_sweep {
+                    x + motion * (max_sweep / length)
+                } else {
+                    *p
+                };
+                (x.inf(&end), x.sup(&end))
+            }));
+        let vertex_boxes = &self.vertex_boxes;
+        let widen = Vec3::repeat(band);
         self.boxes.clear();
-        self.boxes.extend(
-            self.triangles
-                .iter()
-                .map(|t| bounds(t.iter().flat_map(|&i| swept(i as usize)), band)),
-        );
+        self.boxes.par_extend(self.triangles.par_iter().map(|t| {
+            let [a, b, c] = t.map(|i| vertex_boxes[i as usize]);
+            let lo = a.0.inf(&b.0).inf(&c.0) - widen;
+            let hi = a.1.sup(&b.1).sup(&c.1) + widen;
+            Aabb::new(to_parry(&lo), to_parry(&hi))
+        }));
         match &mut self.bvh {
             Some(bvh) if self.steps_since_build < REBUILD_STEPS => {
                 for (t, aabb) in self.boxes.iter().enumerate() {
@@ -186,7 +183,8 @@ impl SelfContactDetector {
             .into_par_iter()
             .with_min_len(256)
             .map(|p| {
-                let query = bounds(swept(p), 0.0);
+                let (lo, hi) = this.vertex_boxes[p];
+                let query = Aabb::new(to_parry(&lo), to_parry(&hi));
                 let mut mine: Vec<SelfContact> = Vec::new();
                 for t in bvh.intersect_aabb(&query) {
                     let triangle = this.triangles[t as usize];
