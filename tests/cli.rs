@@ -113,6 +113,12 @@ fn simulate_reports_the_checked_keys_and_rejects_bad_settings() {
         (vec!["--motion", "missing.npz"], "missing.npz"),
         (vec!["--garment", "missing.obj"], "missing.obj"),
         (vec!["--garment", "cape"], "unknown garment"),
+        (
+            vec!["--self-contact-distance=-0.001"],
+            "self_contact_distance",
+        ),
+        (vec!["--self-contact-distance=0"], "self_contact_distance"),
+        (vec!["--self-friction=-1"], "self_friction"),
     ] {
         let mut args = vec![
             "simulate",
@@ -473,6 +479,12 @@ fn regress_writes_the_checked_json() {
     let j = json(&out);
     let scenarios = j["scenarios"].as_array().unwrap();
     assert!(scenarios.len() >= 12, "{} scenarios", scenarios.len());
+    assert!(
+        scenarios
+            .iter()
+            .any(|s| s["name"].as_str().unwrap().contains("self")),
+        "no self-contact scenario"
+    );
     for s in scenarios {
         for key in ["name", "expected", "measured", "tolerance", "pass"] {
             assert!(s.get(key).is_some(), "missing {key} in {s}");
