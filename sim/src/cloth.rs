@@ -216,6 +216,11 @@ impl ClothState {
     }
 }
 
+/// The point in parry3d's f32 vector type (1e-7 m is far below any contact tolerance).
+pub(crate) fn to_parry(p: &Vec3) -> parry3d::math::Vector {
+    parry3d::math::Vector::new(p.x as f32, p.y as f32, p.z as f32)
+}
+
 /// Closest point on triangle (a, b, c) to p, with barycentric coordinates (Ericson, RTCD 5.1.5).
 pub(crate) fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (Vec3, [f64; 3]) {
     let (ab, ac, ap) = (b - a, c - a, p - a);

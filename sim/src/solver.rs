@@ -421,7 +421,6 @@ impl Solver {
     ) -> Result<FrameReport> {
         let saved = state.clone();
         let mut reason = String::new();
-
         for retry in 0..=self.params.max_retries {
             let substeps = self.params.substeps << retry;
             self.system_for(substeps)?;
@@ -695,7 +694,7 @@ impl Solver {
                 .zip(&ws.self_impulses)
                 .zip(&ws.self_mass)
             {
-                let w = ws.v_next[c.vertex as usize] - point_velocity(c, &ws.v_next);
+                let w = ws.v_next[c.vertex as usize] - c.point(&ws.v_next);
                 let ac = alart_curnier(c.normal, c.min_normal_velocity, c.friction, *r, w, *m);
                 residual = residual.max(ac);
             }
@@ -845,15 +844,6 @@ impl Solver {
         }
         self.times.contact += started.elapsed();
     }
-}
-
-/// Velocity of the point of a pair's triangle below its vertex.
-fn point_velocity(c: &SelfContact, v: &[Vec3]) -> Vec3 {
-    c.triangle
-        .iter()
-        .zip(c.weights)
-        .map(|(&i, w)| w * v[i as usize])
-        .sum()
 }
 
 /// Adds a pair's impulse `r` to the right-hand side: +r at the vertex, -w_i r at the corners.

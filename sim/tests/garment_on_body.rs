@@ -6,19 +6,23 @@ use motions::{BlendIn, BodyModel};
 use sim::scene::{Scene, builtin_template};
 use sim::{Material, SolverParams};
 
-fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
-    let model = BodyModel::default_body();
-    let params = garments::SkirtParams::default();
-    let (garment, attachments) = builtin_template(&model, "default", &params).unwrap();
-    let (template, triangles) = (garment.positions, garment.triangles);
+/// The built-in skirt with `skirt` proportions on the default body through `motion`.
+fn skirt_scene(
+    model: &BodyModel,
+    skirt: &garments::SkirtParams,
+    motion: &str,
+    betas: &[f64],
+    params: SolverParams,
+) -> Scene {
+    let (garment, attachments) = builtin_template(model, "skirt", skirt).unwrap();
     let shaped = model.shape(betas).unwrap();
     let motion = MotionSpec::parse(motion)
         .unwrap()
-        .generate(&model, &shaped)
+        .generate(model, &shaped)
         .unwrap();
-    let scene = Scene {
-        template,
-        triangles,
+    Scene {
+        template: garment.positions,
+        triangles: garment.triangles,
         betas: betas.to_vec(),
         motion,
         blend: BlendIn {
@@ -27,14 +31,21 @@ fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
         },
         material: Material::default(),
         friction: 0.3,
-        params: SolverParams {
-            substeps: 2,
-            max_iterations: 10,
-            ..SolverParams::default()
-        },
+        params,
         frames: None,
         attachments,
+    }
+}
+
+fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
+    let model = BodyModel::default_body();
+    let params = garments::SkirtParams::default();
+    let solver = SolverParams {
+        substeps: 2,
+        max_iterations: 10,
+        ..SolverParams::default()
     };
+    let scene = skirt_scene(&model, &params, motion, betas, solver);
     let mut lowest_top: f64 = f64::INFINITY;
     let mut waist_drop: f64 = 0.0;
     let summary = scene
@@ -96,31 +107,13 @@ fn long_skirt_walk(self_contact: bool) -> usize {
         rings: 77,
         ..garments::SkirtParams::default()
     };
-    let (garment, attachments) = builtin_template(&model, "skirt", &params).unwrap();
-    let motion = MotionSpec::parse("walk:duration=2")
-        .unwrap()
-        .generate(&model, &model.shape(&[]).unwrap())
-        .unwrap();
-    let scene = Scene {
-        template: garment.positions,
-        triangles: garment.triangles,
-        betas: Vec::new(),
-        motion,
-        blend: BlendIn {
-            blend_frames: 15,
-            settle_frames: 5,
-        },
-        material: Material::default(),
-        friction: 0.3,
-        params: SolverParams {
-            substeps: 2,
-            max_iterations: 8,
-            self_contact,
-            ..SolverParams::default()
-        },
-        frames: None,
-        attachments,
+    let solver = SolverParams {
+        substeps: 2,
+        max_iterations: 8,
+        self_contact,
+        ..SolverParams::default()
     };
+    let scene = skirt_scene(&model, &params, "walk:duration=2", &[], solver);
     scene
         .run(&model, |_| Ok(()))
         .unwrap()

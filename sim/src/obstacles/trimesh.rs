@@ -8,12 +8,8 @@ use parry3d::query::PointQueryWithLocation;
 use parry3d::shape::{TriMesh, TriMeshFlags};
 
 use super::{Obstacle, SurfacePoint};
-use crate::cloth::Vec3;
+use crate::cloth::{Vec3, to_parry};
 use crate::error::{Error, Result};
-
-fn to_parry(p: &Vec3) -> Vector {
-    Vector::new(p.x as f32, p.y as f32, p.z as f32)
-}
 
 fn from_parry(p: Vector) -> Vec3 {
     Vec3::new(p.x as f64, p.y as f64, p.z as f64)
