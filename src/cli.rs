@@ -154,10 +154,10 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 30)]
     pub settle_frames: usize,
     /// Substeps per 30 fps frame.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 4)]
     pub substeps: usize,
     /// Maximum solver iterations per substep.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 16)]
     pub iterations: usize,
     /// Turns cloth-cloth contact off (it is on for garment scenes).
     #[arg(long)]

@@ -146,8 +146,8 @@ pub fn cache_dir() -> std::path::PathBuf {
 }
 
 /// A library design's template on `model`, made (sewn and draped, about 5-20 s) on first use
-/// and cached under [`cache_dir`], keyed by the pattern, the body, the sewing options and the
-/// software version.
+/// and cached under [`cache_dir`], keyed by the pattern, the body, the sewing options, the
+/// software version and the engine revision.
 /// Refused when the design fails a quality gate. The cached OBJ is always what is returned (read
 /// back after making), so results do not depend on whether the cache was warm.
 pub fn library_template(
@@ -160,6 +160,7 @@ pub fn library_template(
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     pattern.to_json().hash(&mut hasher);
     env!("CARGO_PKG_VERSION").hash(&mut hasher);
+    sim::ENGINE_REVISION.hash(&mut hasher);
     model.name().hash(&mut hasher);
     format!("{options:?}").hash(&mut hasher);
     for v in model.template() {

@@ -34,3 +34,7 @@ pub use params::{Material, SolverParams};
 pub use self_intersection::{count_self_intersections, self_intersecting_pairs};
 pub use solver::{ClothSetup, FrameReport, Solver, StageTimes, StepReport};
 pub use system::Symbolic;
+
+/// Bumped whenever a change to the engine changes what it computes, so templates draped and
+/// cached by an older engine are made again.
+pub const ENGINE_REVISION: u32 = 2;

@@ -32,12 +32,12 @@ use crate::system::{GlobalSystem, Symbolic};
 /// (lagging it halves the solve time); k_b = 1e-4 has 78% and stays in the matrix.
 const LAGGED_BENDING_SHARE: f64 = 0.1;
 
-/// Share of the coupling to free neighbours counted in a contact node's effective mass (see
-/// `contact_step`).
-const COUPLING_SHARE: f64 = 0.3;
-
 /// Under-relaxation of the contact impulses between iterations (see `contact_step`).
 const IMPULSE_RELAXATION: f64 = 0.5;
+
+/// Floor on a contact node's response to its patch's impulses (see `effective_masses`), so a
+/// node that barely moves cannot get an unbounded effective mass.
+const MIN_PATCH_RESPONSE: f64 = 1e-6;
 
 /// Everything that defines a cloth besides its state: mesh, material and constraints.
 #[derive(Debug, Clone)]
@@ -626,20 +626,11 @@ impl Solver {
                 });
         }
         self.ws.v.copy_from_slice(&self.ws.v_star);
+        self.times.local += started.elapsed();
+        let started = Instant::now();
+        self.effective_masses(substeps);
         {
-            let system = &self.systems[&substeps];
             let ws = &mut self.ws;
-            ws.effective_mass.clear();
-            for c in &ws.contacts {
-                let j = c.vertex as usize;
-                let m = self.masses[j] + COUPLING_SHARE * system.free_coupling(j, &ws.in_contact);
-                ws.effective_mass.push(m);
-            }
-            for &j in &ws.self_nodes {
-                let j = j as usize;
-                ws.node_mass[j] =
-                    self.masses[j] + COUPLING_SHARE * system.free_coupling(j, &ws.in_contact);
-            }
             let (node_mass, pinned) = (&ws.node_mass, &self.pinned);
             let inverse = |j: u32| {
                 if pinned[j as usize] {
@@ -659,7 +650,7 @@ impl Solver {
                 1.0 / (inverse(c.vertex) + other)
             }));
         }
-        self.times.local += started.elapsed();
+        self.times.contact += started.elapsed();
 
         for iteration in 1..=self.params.max_iterations {
             let lag = self.systems[&substeps].lags_bending();
@@ -707,6 +698,36 @@ impl Solver {
             }
         }
         report
+    }
+
+    /// Effective mass of every contact node (body contacts and cloth pairs): m_j / u_j with
+    /// u = P^-1 (M 1_C), the velocity node j gets when every contact node j receives an
+    /// impulse of its own mass m_j (one extra solve per step). Inside a patch in contact this
+    /// is m_j (P 1 = M 1: the patch moves as one, Ly et al.'s choice, exact for a rigid
+    /// impact); for an isolated contact it is 1 / (P^-1)_jj, the exact response of the node
+    /// held by its free neighbours. See `contact_step`.
+    fn effective_masses(&mut self, substeps: usize) {
+        let ws = &mut self.ws;
+        for ((r, &m), &c) in ws.rhs.iter_mut().zip(&self.masses).zip(&ws.in_contact) {
+            *r = if c { Vec3::repeat(m) } else { Vec3::zeros() };
+        }
+        for (r, &p) in ws.rhs.iter_mut().zip(&self.pinned) {
+            if p {
+                *r = Vec3::zeros();
+            }
+        }
+        if !ws.contacts.is_empty() || !ws.self_nodes.is_empty() {
+            let system = self.systems.get_mut(&substeps).expect("system factorized");
+            system.solve(&ws.rhs, &mut ws.v_next);
+        }
+        let masses = &self.masses;
+        let mass = |j: usize| masses[j] / ws.v_next[j].x.clamp(MIN_PATCH_RESPONSE, 1.0);
+        ws.effective_mass.clear();
+        ws.effective_mass
+            .extend(ws.contacts.iter().map(|c| mass(c.vertex as usize)));
+        for &j in &ws.self_nodes {
+            ws.node_mass[j as usize] = mass(j as usize);
+        }
     }
 
     /// Projections at x = x_n + h v and the right-hand side M v* + h sum w A^T (p - A x_n),
@@ -768,10 +789,10 @@ impl Solver {
     /// meshes the springs make P_jj 10^2-10^4 times m_j, so with m = m_j an isolated contact
     /// gets well under 1% of its correction per iteration (measured: residual ~1 m/s after 20
     /// iterations, cloth falling through the body), while m = P_jj overshoots wherever
-    /// neighbouring nodes are in contact too and diverges. Neighbours in contact move with the
-    /// node (their coupling does not resist), free ones hold it back: we take
-    /// m = m_j + COUPLING_SHARE * sum over free neighbours k of |P_jk|, which is m_j inside a
-    /// contact patch and about a third of P_jj for an isolated contact.
+    /// neighbouring nodes are in contact too and diverges. What the node really gets is the
+    /// response of its whole contact patch: `effective_masses` takes m = m_j / (P^-1 M 1_C)_j,
+    /// m_j inside a patch (Ly et al.'s choice, exact when the patch moves as one) and
+    /// 1 / (P^-1)_jj for an isolated contact.
     fn contact_step(&mut self, substeps: usize) {
         let started = Instant::now();
         let system = &self.systems[&substeps];

@@ -165,16 +165,6 @@ impl GlobalSystem {
         self.lag_bending
     }
 
-    /// Sum of |P_jk| over the off-diagonal entries of row `j` whose column is not `excluded`
-    /// (the stiffness coupling node j to its free neighbours, kg).
-    #[inline]
-    pub fn free_coupling(&self, j: usize, excluded: &[bool]) -> f64 {
-        (self.row_ptr[j]..self.row_ptr[j + 1])
-            .filter(|&k| self.col[k] as usize != j && !excluded[self.col[k] as usize])
-            .map(|k| self.val[k].abs())
-            .sum()
-    }
-
     /// Row `j` of P times `v`.
     #[inline]
     pub fn row_times(&self, j: usize, v: &[Vec3]) -> Vec3 {

@@ -98,8 +98,8 @@ fn skirt_rides_jumping_jacks_on_a_larger_body() {
     assert!(stretch < 1.3, "max edge stretch {stretch:.3}");
 }
 
-/// An ankle-length skirt (85 cm, the legs swing inside it) on two walk cycles at the default
-/// 2 x 8: the most crossing triangle pairs of a frame, with self-contact on or off.
+/// An ankle-length skirt (85 cm, the legs swing inside it) on two walk cycles at the garment
+/// default 4 x 16: the most crossing triangle pairs of a frame, with self-contact on or off.
 fn long_skirt_walk(self_contact: bool) -> usize {
     let model = BodyModel::default_body();
     let params = garments::SkirtParams {
@@ -108,8 +108,8 @@ fn long_skirt_walk(self_contact: bool) -> usize {
         ..garments::SkirtParams::default()
     };
     let solver = SolverParams {
-        substeps: 2,
-        max_iterations: 8,
+        substeps: 4,
+        max_iterations: 16,
         self_contact,
         ..SolverParams::default()
     };
@@ -120,16 +120,16 @@ fn long_skirt_walk(self_contact: bool) -> usize {
         .max_self_intersections
 }
 
-/// The target is (near) zero; measured 172 with self-contact against 994 without
-/// (docs/PHYSICS.md, self-contact): the legs press cloth into the body and through itself
-/// where the body contact has not converged. This checks the part that works.
+/// The target is (near) zero. Measured 58 crossing pairs (of 17,000 triangles) with
+/// self-contact against 245 without (docs/PHYSICS.md, self-contact); at 2 x 8 the legs press
+/// cloth into the body and through itself where the body contact has not converged (232).
 #[test]
 fn self_contact_keeps_a_long_skirt_on_a_walking_body_from_passing_through_itself() {
     let on = long_skirt_walk(true);
     let off = long_skirt_walk(false);
     eprintln!("most crossing triangle pairs in a frame: {on} with self-contact, {off} without");
     assert!(
-        off > 0 && 4 * on < off,
+        on <= 100 && 4 * on < off,
         "{on} with self-contact, {off} without"
     );
 }

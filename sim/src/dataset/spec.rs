@@ -126,8 +126,8 @@ impl Default for SolverSpec {
     fn default() -> Self {
         let plain = crate::SolverParams::default();
         Self {
-            substeps: 2,
-            iterations: 8,
+            substeps: 4,
+            iterations: 16,
             self_contact: true,
             self_contact_distance: plain.self_contact_distance,
             self_friction: plain.self_friction,
@@ -167,8 +167,8 @@ impl Default for GateSpec {
             max_self_intersections: 300,
             timeout_s: 900.0,
             retries: 1,
-            retry_substeps: 4,
-            retry_iterations: 20,
+            retry_substeps: 8,
+            retry_iterations: 16,
         }
     }
 }
