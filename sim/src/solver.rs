@@ -167,6 +167,10 @@ struct Workspace {
     node_mass: Vec<f64>,
     /// m_j v_j - (P v)_j of the nodes in `self_nodes` (indexed by vertex).
     node_free: Vec<Vec3>,
+    /// M 1_C: each contact node's mass (see `effective_masses`).
+    patch_load: Vec<f64>,
+    /// P^-1 M 1_C.
+    patch_response: Vec<f64>,
 }
 
 /// The solver: factorized system, constraints and workspace for one cloth.
@@ -293,6 +297,8 @@ impl Solver {
                 self_nodes: Vec::new(),
                 node_mass: vec![0.0; n],
                 node_free: vec![Vec3::zeros(); n],
+                patch_load: vec![0.0; n],
+                patch_response: vec![0.0; n],
             },
             times: StageTimes::default(),
             setup,
@@ -708,21 +714,23 @@ impl Solver {
     /// held by its free neighbours. See `contact_step`.
     fn effective_masses(&mut self, substeps: usize) {
         let ws = &mut self.ws;
-        for ((r, &m), &c) in ws.rhs.iter_mut().zip(&self.masses).zip(&ws.in_contact) {
-            *r = if c { Vec3::repeat(m) } else { Vec3::zeros() };
-        }
-        for (r, &p) in ws.rhs.iter_mut().zip(&self.pinned) {
-            if p {
-                *r = Vec3::zeros();
-            }
-        }
-        if !ws.contacts.is_empty() || !ws.self_nodes.is_empty() {
-            let system = self.systems.get_mut(&substeps).expect("system factorized");
-            system.solve(&ws.rhs, &mut ws.v_next);
-        }
-        let masses = &self.masses;
-        let mass = |j: usize| masses[j] / ws.v_next[j].x.clamp(MIN_PATCH_RESPONSE, 1.0);
         ws.effective_mass.clear();
+        if ws.contacts.is_empty() && ws.self_nodes.is_empty() {
+            return;
+        }
+        for ((b, &m), &c) in ws
+            .patch_load
+            .iter_mut()
+            .zip(&self.masses)
+            .zip(&ws.in_contact)
+        {
+            *b = if c { m } else { 0.0 };
+        }
+        let system = self.systems.get_mut(&substeps).expect("system factorized");
+        system.solve_scalar(&ws.patch_load, &mut ws.patch_response);
+        let masses = &self.masses;
+        let response = &ws.patch_response;
+        let mass = |j: usize| masses[j] / response[j].clamp(MIN_PATCH_RESPONSE, 1.0);
         ws.effective_mass
             .extend(ws.contacts.iter().map(|c| mass(c.vertex as usize)));
         for &j in &ws.self_nodes {

@@ -175,6 +175,20 @@ impl GlobalSystem {
         sum
     }
 
+    /// Solves P u = b for one scalar right-hand side `b` (zero on pinned vertices, which stay
+    /// at rest), written to `out`: a third of [`GlobalSystem::solve`]'s work.
+    pub fn solve_scalar(&mut self, b: &[f64], out: &mut [f64]) {
+        for (i, &value) in b.iter().enumerate() {
+            self.rhs[(i, 0)] = if self.pinned[i] { 0.0 } else { value };
+        }
+        let llt = LltRef::<usize, f64>::new(&self.symbolic, &self.factor);
+        let (x, _) = self.rhs.as_mut().split_at_col_mut(1);
+        solve_columns(&llt, x, &mut self.scratch[0]);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.rhs[(i, 0)];
+        }
+    }
+
     /// Solves P v = rhs with pinned velocities prescribed: `rhs` holds the right-hand side on
     /// free vertices and the prescribed velocity on pinned ones; the solution is written to
     /// `out`. The x column is solved on one thread while y and z are solved on another; the
