@@ -156,7 +156,8 @@ pub struct SceneArgs {
     /// Substeps per 30 fps frame.
     #[arg(long, default_value_t = 4)]
     pub substeps: usize,
-    /// Maximum solver iterations per substep.
+    /// Maximum solver iterations per substep (with self-contact, up to 4x this in a step
+    /// whose layers would otherwise cross).
     #[arg(long, default_value_t = 16)]
     pub iterations: usize,
     /// Turns cloth-cloth contact off (it is on for garment scenes).

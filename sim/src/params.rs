@@ -52,7 +52,9 @@ impl Material {
 pub struct SolverParams {
     /// Substeps per output frame (the time step is frame time / substeps). Default 4.
     pub substeps: usize,
-    /// Maximum local-global iterations per substep. Default 20.
+    /// Maximum local-global iterations per substep. Default 20. With self-contact on, a step
+    /// whose velocities would still carry a vertex through a layer keeps iterating, up to 4
+    /// times this (the frame statistics report the iterations run).
     pub max_iterations: usize,
     /// Convergence tolerance on the residual, m/s: the largest velocity change of an iteration
     /// and the largest Alart-Curnier contact residual (divided by the node mass). Default 1e-4.

@@ -35,6 +35,14 @@ const LAGGED_BENDING_SHARE: f64 = 0.1;
 /// Under-relaxation of the contact impulses between iterations (see `contact_step`).
 const IMPULSE_RELAXATION: f64 = 0.5;
 
+/// A step whose velocities would still carry a vertex through a triangle of the same cloth
+/// after `max_iterations` keeps iterating until they do not, up to this many times
+/// `max_iterations`. The iteration stops before it converges, and where two bodies pinch
+/// layers (a long skirt's panels between the legs) what it leaves crosses them (measured on
+/// the long-skirt walk at 4 x 16, most crossing triangle pairs of a frame: 58 with no extra
+/// iterations, 28 at up to 2x, 6 at up to 4x, for 30% more time on that run).
+const CROSSING_ITERATION_FACTOR: usize = 4;
+
 /// Floor on a contact node's response to its patch's impulses (see `effective_masses`), so a
 /// node that barely moves cannot get an unbounded effective mass.
 const MIN_PATCH_RESPONSE: f64 = 1e-6;
@@ -658,7 +666,12 @@ impl Solver {
         }
         self.times.contact += started.elapsed();
 
-        for iteration in 1..=self.params.max_iterations {
+        let limit = if self.ws.self_contacts.is_empty() {
+            self.params.max_iterations
+        } else {
+            CROSSING_ITERATION_FACTOR * self.params.max_iterations
+        };
+        for iteration in 1..=limit {
             let lag = self.systems[&substeps].lags_bending();
             self.local_step(state, h, lag);
             self.contact_step(substeps);
@@ -702,8 +715,21 @@ impl Solver {
             if residual < self.params.tolerance {
                 break;
             }
+            if iteration >= self.params.max_iterations && !self.layers_would_cross(h) {
+                break;
+            }
         }
         report
+    }
+
+    /// Whether the current velocities carry a vertex through the triangle of one of its pairs
+    /// by the end of the step (a pair on the right side now, on the wrong side then).
+    fn layers_would_cross(&self, h: f64) -> bool {
+        let ws = &self.ws;
+        ws.self_contacts.iter().any(|c| {
+            let approach = (ws.v[c.vertex as usize] - c.point(&ws.v)).dot(&c.normal);
+            c.distance > 0.0 && c.distance + h * approach < 0.0
+        })
     }
 
     /// Effective mass of every contact node (body contacts and cloth pairs): m_j / u_j with

@@ -120,16 +120,17 @@ fn long_skirt_walk(self_contact: bool) -> usize {
         .max_self_intersections
 }
 
-/// The target is (near) zero. Measured 58 crossing pairs (of 17,000 triangles) with
-/// self-contact against 245 without (docs/PHYSICS.md, self-contact); at 2 x 8 the legs press
-/// cloth into the body and through itself where the body contact has not converged (232).
+/// The target is (near) zero. Measured 6 crossing pairs (of 17,000 triangles) with
+/// self-contact against 245 without (docs/PHYSICS.md, self-contact); without the extra
+/// iterations for steps whose layers would cross it was 58: the legs pinch the panels between
+/// them and the unconverged iteration lets them through.
 #[test]
 fn self_contact_keeps_a_long_skirt_on_a_walking_body_from_passing_through_itself() {
     let on = long_skirt_walk(true);
     let off = long_skirt_walk(false);
     eprintln!("most crossing triangle pairs in a frame: {on} with self-contact, {off} without");
     assert!(
-        on <= 100 && 4 * on < off,
+        on <= 20 && 10 * on < off,
         "{on} with self-contact, {off} without"
     );
 }
