@@ -726,10 +726,13 @@ impl Solver {
     /// by the end of the step (a pair on the right side now, on the wrong side then).
     fn layers_would_cross(&self, h: f64) -> bool {
         let ws = &self.ws;
-        ws.self_contacts.iter().any(|c| {
-            let approach = (ws.v[c.vertex as usize] - c.point(&ws.v)).dot(&c.normal);
-            c.distance > 0.0 && c.distance + h * approach < 0.0
-        })
+        ws.self_contacts
+            .iter()
+            .filter(|c| c.distance > 0.0)
+            .any(|c| {
+                let approach = (ws.v[c.vertex as usize] - c.point(&ws.v)).dot(&c.normal);
+                c.distance + h * approach < 0.0
+            })
     }
 
     /// Effective mass of every contact node (body contacts and cloth pairs): m_j / u_j with
