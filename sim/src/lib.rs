@@ -25,6 +25,7 @@ mod self_intersection;
 pub mod sewing;
 mod solver;
 mod system;
+mod untangle;
 
 pub use cloth::{ClothMesh, ClothState, Vec3};
 pub use constraints::{Attachment, BendingRest, Seam, Spring};
@@ -34,7 +35,8 @@ pub use params::{Material, SolverParams};
 pub use self_intersection::{count_self_intersections, self_intersecting_pairs};
 pub use solver::{ClothSetup, FrameReport, Solver, StageTimes, StepReport};
 pub use system::Symbolic;
+pub use untangle::{UntangleReport, untangle};
 
 /// Bumped whenever a change to the engine changes what it computes, so templates draped and
 /// cached by an older engine are made again.
-pub const ENGINE_REVISION: u32 = 2;
+pub const ENGINE_REVISION: u32 = 3;

@@ -7,14 +7,19 @@
 //! 2. Close: seam springs whose gap cap is lowered linearly from the largest initial gap to 0
 //!    over `close_frames` (so no seam closes faster than that), gravity off, strong air
 //!    damping, the body colliding, until every stitched pair is within half the seam gate.
-//! 3. Settle: gravity on, damping 6/s, four substeps, until at most 1.5% of vertices moved
-//!    more than 1 cm/s on average over the last 10 frames (net displacement, so the contact
-//!    solver's frame-to-frame noise does not count), or the frame budget runs out.
-//! 4. Merge: stitched pairs become one vertex; the merged, draped mesh is the template.
+//! 3. Untangle: creases that closing folded through themselves are smoothed open
+//!    ([`crate::untangle`]); closing runs without cloth-cloth contact, which would hold
+//!    panels that start apart from meeting.
+//! 4. Settle: cloth-cloth contact on, gravity on, damping 6/s, four substeps, until at most
+//!    1.5% of vertices moved more than 1 cm/s on average over the last 10 frames (net
+//!    displacement, so the contact solver's frame-to-frame noise does not count), or the
+//!    frame budget runs out.
+//! 5. Merge: stitched pairs become one vertex; the merged, draped mesh is the template.
 //!
 //! The gates are GarmentCode's: static equilibrium (moving fraction <= 1.5%), cloth-body
-//! intersections (<= 35 vertices inside), seam gaps (< 2 mm before merging); the report also
-//! carries the largest edge stretch and the timings.
+//! intersections (<= 35 vertices inside), seam gaps (< 2 mm before merging),
+//! self-intersections (<= 300 crossing triangle pairs); the report also carries the largest
+//! edge stretch and the timings.
 
 use std::time::Instant;
 
@@ -28,7 +33,9 @@ use crate::error::{Error, Result};
 use crate::obstacles::{AnimatedMesh, Obstacle};
 use crate::params::{Material, SolverParams};
 use crate::scene::{FPS, canonical_body, edge_stretch};
+use crate::self_intersection::count_self_intersections;
 use crate::solver::{ClothSetup, Solver};
+use crate::untangle::{UntangleReport, untangle};
 
 /// Height of GarmentCode's average body (f_smpl_average_A40.obj), m.
 pub const PATTERN_BODY_HEIGHT_M: f64 = 1.6584;
@@ -53,6 +60,8 @@ pub const MOVING_WINDOW: usize = 10;
 pub const MAX_VERTS_INSIDE: usize = 35;
 /// Gate: stitched vertices closer than this before merging, m.
 pub const MAX_SEAM_GAP_M: f64 = 0.002;
+/// Gate: at most this many crossing triangle pairs in the template.
+pub const MAX_SELF_INTERSECTIONS: usize = 300;
 
 /// How a pattern is sewn and draped.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -109,14 +118,72 @@ pub struct SewingReport {
     pub moving_fraction: f64,
     /// Largest edge length over its flat-pattern rest length.
     pub max_edge_stretch: f64,
+    /// Crossing triangle pairs of the template.
+    pub self_intersections: usize,
     /// Frames spent closing seams and settling.
     pub close_frames: usize,
+    /// Crossing triangle pairs when the seams had closed (stitched vertices counted as one).
+    pub crossings_closed: usize,
+    /// Crossing triangle pairs left after untangling, before settling.
+    pub crossings_untangled: usize,
     /// Settling frames.
     pub settle_frames: usize,
     /// Wall time of the simulation, s.
     pub drape_s: f64,
     /// Which gates failed, in words (empty when all passed).
     pub failed: Vec<String>,
+}
+
+/// Untangles `state` ([`untangle`]) as the merged mesh: stitched vertices move as one, by
+/// the displacement of their mean, and moved vertices come to rest.
+fn untangle_seamed(
+    state: &mut ClothState,
+    triangles: &[[u32; 3]],
+    stitch_pairs: &[[u32; 2]],
+) -> UntangleReport {
+    let n = state.positions.len();
+    let mut root: Vec<u32> = (0..n as u32).collect();
+    fn find(root: &mut [u32], mut v: u32) -> u32 {
+        while root[v as usize] != v {
+            root[v as usize] = root[root[v as usize] as usize];
+            v = root[v as usize];
+        }
+        v
+    }
+    for &[a, b] in stitch_pairs {
+        let (ra, rb) = (find(&mut root, a), find(&mut root, b));
+        if ra != rb {
+            root[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    let root: Vec<u32> = (0..n as u32).map(|v| find(&mut root, v)).collect();
+    let mut mean = vec![Vec3::zeros(); n];
+    let mut count = vec![0usize; n];
+    for (v, p) in state.positions.iter().enumerate() {
+        mean[root[v] as usize] += p;
+        count[root[v] as usize] += 1;
+    }
+    for (m, &c) in mean.iter_mut().zip(&count) {
+        if c > 0 {
+            *m /= c as f64;
+        }
+    }
+    let start = mean.clone();
+    // Triangles that collapse when merged (dart tips) are left out, as merging drops them.
+    let triangles: Vec<[u32; 3]> = triangles
+        .iter()
+        .map(|t| t.map(|v| root[v as usize]))
+        .filter(|[a, b, c]| a != b && b != c && a != c)
+        .collect();
+    let report = untangle(&mut mean, &triangles);
+    for (v, r) in root.iter().enumerate() {
+        let moved = mean[*r as usize] - start[*r as usize];
+        if moved != Vec3::zeros() {
+            state.positions[v] += moved;
+            state.velocities[v] = Vec3::zeros();
+        }
+    }
+    report
 }
 
 /// Lowest and highest y of a vertex set.
@@ -261,7 +328,18 @@ pub fn sew(
         }
     }
     let close_frames = frame;
-    // Settle under gravity.
+    // Open the creases closing left crossed, then settle with cloth-cloth contact so the
+    // layers stay apart (with contact from the start, panels that start apart cannot close).
+    let untangled = untangle_seamed(&mut state, mesh.triangles(), &sewn.stitch_pairs);
+    let mut solver = Solver::new(
+        solver.setup().clone(),
+        SolverParams {
+            self_contact: true,
+            ..params
+        },
+        1.0 / FPS,
+    )?;
+    solver.set_seam_length_cap(0.0);
     solver.set_gravity_and_damping(SolverParams::default().gravity, options.settle_damping);
     // Moving = net displacement over the last MOVING_WINDOW frames faster than MOVING_SPEED
     // on average: drift, not the contact solver's frame-to-frame noise.
@@ -311,6 +389,7 @@ pub fn sew(
         .map(|p| Vec3::new(p[0], p[1], p[2]))
         .collect();
     let distances = body_mesh.measure(&merged, 0.03);
+    let self_intersections = count_self_intersections(&merged, &template.triangles);
     let verts_inside = distances.iter().filter(|&&d| d < 0.0).count();
     let max_penetration_m = distances.iter().fold(0.0f64, |a, &d| a.max(-d));
     let mut failed = Vec::new();
@@ -333,6 +412,12 @@ pub fn sew(
             1e3 * MAX_SEAM_GAP_M
         ));
     }
+    if self_intersections > MAX_SELF_INTERSECTIONS {
+        failed.push(format!(
+            "self-intersections: {self_intersections} crossing triangle pairs (at most \
+             {MAX_SELF_INTERSECTIONS})"
+        ));
+    }
     let report = SewingReport {
         gates_passed: failed.is_empty(),
         vertices: template.positions.len(),
@@ -342,7 +427,10 @@ pub fn sew(
         max_seam_gap_m,
         moving_fraction,
         max_edge_stretch,
+        self_intersections,
         close_frames,
+        crossings_closed: untangled.before,
+        crossings_untangled: untangled.after,
         settle_frames,
         drape_s: started.elapsed().as_secs_f64(),
         failed,

@@ -38,8 +38,6 @@ struct MakeReport {
     name: String,
     #[serde(flatten)]
     sewing: sim::sewing::SewingReport,
-    /// Crossing triangle pairs of the template (reported, not gated until self-contact).
-    self_intersections: usize,
     edge_length_m: f64,
     mesh_s: f64,
     wall_s: f64,
@@ -179,21 +177,13 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
     let made = MakeReport {
         name: pattern.name.clone(),
         sewing,
-        self_intersections: sim::count_self_intersections(
-            &template
-                .positions
-                .iter()
-                .map(|p| sim::Vec3::new(p[0], p[1], p[2]))
-                .collect::<Vec<_>>(),
-            &template.triangles,
-        ),
         edge_length_m: edge_length,
         mesh_s,
         wall_s: started.elapsed().as_secs_f64(),
     };
     say!(
         "{}: {} vertices, {} triangles; inside {}, seam gap {:.2} mm, moving {:.1}%, max stretch \
-         {:.3}; {:.1} s -> {}",
+         {:.3}, self-intersections {}; {:.1} s -> {}",
         made.name,
         made.sewing.vertices,
         made.sewing.triangles,
@@ -201,6 +191,7 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
         1e3 * made.sewing.max_seam_gap_m,
         100.0 * made.sewing.moving_fraction,
         made.sewing.max_edge_stretch,
+        made.sewing.self_intersections,
         made.wall_s,
         out.display()
     );

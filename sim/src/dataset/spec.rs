@@ -164,7 +164,7 @@ impl Default for GateSpec {
             max_penetration_m: 0.02,
             max_inside_fraction: 0.05,
             max_edge_stretch: 1.5,
-            max_self_intersections: 300,
+            max_self_intersections: crate::sewing::MAX_SELF_INTERSECTIONS,
             timeout_s: 900.0,
             retries: 1,
             retry_substeps: 8,
