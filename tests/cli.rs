@@ -527,6 +527,8 @@ fn garments_list_make_and_check() {
         "max_seam_gap_m",
         "moving_fraction",
         "self_intersections",
+        "crossings_closed",
+        "crossings_untangled",
         "wall_s",
     ] {
         assert!(r.get(key).is_some(), "report lacks {key}: {r}");
