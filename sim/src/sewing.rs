@@ -136,27 +136,9 @@ pub struct SewingReport {
 
 /// Untangles `state` ([`untangle`]) as the merged mesh: stitched vertices move as one, by
 /// the displacement of their mean, and moved vertices come to rest.
-fn untangle_seamed(
-    state: &mut ClothState,
-    triangles: &[[u32; 3]],
-    stitch_pairs: &[[u32; 2]],
-) -> UntangleReport {
+fn untangle_seamed(state: &mut ClothState, sewn: &SewnMesh) -> UntangleReport {
     let n = state.positions.len();
-    let mut root: Vec<u32> = (0..n as u32).collect();
-    fn find(root: &mut [u32], mut v: u32) -> u32 {
-        while root[v as usize] != v {
-            root[v as usize] = root[root[v as usize] as usize];
-            v = root[v as usize];
-        }
-        v
-    }
-    for &[a, b] in stitch_pairs {
-        let (ra, rb) = (find(&mut root, a), find(&mut root, b));
-        if ra != rb {
-            root[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
-    let root: Vec<u32> = (0..n as u32).map(|v| find(&mut root, v)).collect();
+    let root = sewn.stitched_roots();
     let mut mean = vec![Vec3::zeros(); n];
     let mut count = vec![0usize; n];
     for (v, p) in state.positions.iter().enumerate() {
@@ -170,7 +152,9 @@ fn untangle_seamed(
     }
     let start = mean.clone();
     // Triangles that collapse when merged (dart tips) are left out, as merging drops them.
-    let triangles: Vec<[u32; 3]> = triangles
+    let triangles: Vec<[u32; 3]> = sewn
+        .garment
+        .triangles
         .iter()
         .map(|t| t.map(|v| root[v as usize]))
         .filter(|[a, b, c]| a != b && b != c && a != c)
@@ -330,7 +314,7 @@ pub fn sew(
     let close_frames = frame;
     // Open the creases closing left crossed, then settle with cloth-cloth contact so the
     // layers stay apart (with contact from the start, panels that start apart cannot close).
-    let untangled = untangle_seamed(&mut state, mesh.triangles(), &sewn.stitch_pairs);
+    let untangled = untangle_seamed(&mut state, sewn);
     let mut solver = Solver::new(
         solver.setup().clone(),
         SolverParams {

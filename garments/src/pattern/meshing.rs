@@ -261,17 +261,10 @@ impl SewnMesh {
             .fold(0.0, f64::max)
     }
 
-    /// Joins the stitched vertices into one (at the mean of their `positions`), drops the
-    /// triangles that collapse (dart tips) and renumbers: the template. Seam vertices keep one
-    /// UV per panel.
-    pub fn merged(&self, positions: &[[f64; 3]]) -> Result<Garment> {
+    /// Each vertex's representative once stitched vertices are joined: the lowest index of
+    /// the vertices the stitches connect it to (itself when unstitched).
+    pub fn stitched_roots(&self) -> Vec<u32> {
         let n = self.garment.positions.len();
-        if positions.len() != n {
-            return Err(Error::Invalid(format!(
-                "{} positions for {n} vertices",
-                positions.len()
-            )));
-        }
         let mut parent: Vec<u32> = (0..n as u32).collect();
         fn root(parent: &mut [u32], mut v: u32) -> u32 {
             while parent[v as usize] != v {
@@ -286,28 +279,42 @@ impl SewnMesh {
                 parent[ra.max(rb) as usize] = ra.min(rb);
             }
         }
+        (0..n as u32).map(|v| root(&mut parent, v)).collect()
+    }
+
+    /// Joins the stitched vertices into one (at the mean of their `positions`), drops the
+    /// triangles that collapse (dart tips) and renumbers: the template. Seam vertices keep one
+    /// UV per panel.
+    pub fn merged(&self, positions: &[[f64; 3]]) -> Result<Garment> {
+        let n = self.garment.positions.len();
+        if positions.len() != n {
+            return Err(Error::Invalid(format!(
+                "{} positions for {n} vertices",
+                positions.len()
+            )));
+        }
+        let root = self.stitched_roots();
         let mut sum = vec![[0.0; 3]; n];
         let mut count = vec![0usize; n];
         for (v, p) in positions.iter().enumerate() {
-            let r = root(&mut parent, v as u32) as usize;
+            let r = root[v] as usize;
             for k in 0..3 {
                 sum[r][k] += p[k];
             }
             count[r] += 1;
         }
         let mut g = self.garment.clone();
-        for v in 0..n {
-            let r = root(&mut parent, v as u32) as usize;
-            g.positions[v] = sum[r].map(|c| c / count[r] as f64);
+        for (p, &r) in g.positions.iter_mut().zip(&root) {
+            *p = sum[r as usize].map(|c| c / count[r as usize] as f64);
         }
         for t in &mut g.triangles {
             for v in t.iter_mut() {
-                *v = root(&mut parent, *v);
+                *v = root[*v as usize];
             }
         }
         for vs in g.vertex_labels.values_mut() {
             for v in vs.iter_mut() {
-                *v = root(&mut parent, *v);
+                *v = root[*v as usize];
             }
         }
         let mut seen = HashSet::new();
