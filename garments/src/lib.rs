@@ -22,4 +22,4 @@ pub use check::{CheckReport, Finding, MAX_EXTENT_M, MIN_EXTENT_M, check, repair}
 pub use error::{Error, Result};
 pub use mesh::Garment;
 pub use obj::{read_obj, write_obj, write_ply};
-pub use pattern::{Pattern, SewnMesh};
+pub use pattern::{Pattern, SewnMesh, joined_roots};

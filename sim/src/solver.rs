@@ -268,9 +268,8 @@ impl Solver {
             .collect();
         let terms = constraints.len();
         let self_contact = params.self_contact.then(|| {
-            let mut links = setup.mesh.edges().to_vec();
-            links.extend(setup.seams.iter().map(|s| [s.a, s.b]));
-            SelfContactDetector::new(n, setup.mesh.triangles(), &links)
+            let seams: Vec<[u32; 2]> = setup.seams.iter().map(|s| [s.a, s.b]).collect();
+            SelfContactDetector::new(n, setup.mesh.triangles(), setup.mesh.edges(), &seams)
         });
         let mut solver = Self {
             params,

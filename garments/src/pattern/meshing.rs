@@ -261,25 +261,9 @@ impl SewnMesh {
             .fold(0.0, f64::max)
     }
 
-    /// Each vertex's representative once stitched vertices are joined: the lowest index of
-    /// the vertices the stitches connect it to (itself when unstitched).
+    /// Each vertex's representative once stitched vertices are joined (see [`joined_roots`]).
     pub fn stitched_roots(&self) -> Vec<u32> {
-        let n = self.garment.positions.len();
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn root(parent: &mut [u32], mut v: u32) -> u32 {
-            while parent[v as usize] != v {
-                parent[v as usize] = parent[parent[v as usize] as usize];
-                v = parent[v as usize];
-            }
-            v
-        }
-        for &[a, b] in &self.stitch_pairs {
-            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-            if ra != rb {
-                parent[ra.max(rb) as usize] = ra.min(rb);
-            }
-        }
-        (0..n as u32).map(|v| root(&mut parent, v)).collect()
+        joined_roots(self.garment.positions.len(), &self.stitch_pairs)
     }
 
     /// Joins the stitched vertices into one (at the mean of their `positions`), drops the
@@ -333,4 +317,26 @@ impl SewnMesh {
         g.validate()?;
         Ok(g)
     }
+}
+
+/// Each of `num_vertices` vertices' representative once every pair in `pairs` is joined: the
+/// lowest index of the vertices the pairs connect it to (itself when in no pair).
+pub fn joined_roots(num_vertices: usize, pairs: &[[u32; 2]]) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..num_vertices as u32).collect();
+    fn root(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            parent[v as usize] = parent[parent[v as usize] as usize];
+            v = parent[v as usize];
+        }
+        v
+    }
+    for &[a, b] in pairs {
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    (0..num_vertices as u32)
+        .map(|v| root(&mut parent, v))
+        .collect()
 }

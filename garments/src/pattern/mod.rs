@@ -16,7 +16,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 pub use curve::{Curve, relative_to_absolute};
-pub use meshing::{DEFAULT_EDGE_LENGTH_M, SewnMesh};
+pub use meshing::{DEFAULT_EDGE_LENGTH_M, SewnMesh, joined_roots};
 pub use spec::{EdgeJson, PanelJson, PatternJson, PropertiesJson, SpecFile};
 
 use crate::error::{Error, Result};
