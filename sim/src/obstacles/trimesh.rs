@@ -158,7 +158,7 @@ impl Obstacle for StaticMesh {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// An axis-aligned unit cube as 12 outward triangles.
