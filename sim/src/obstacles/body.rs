@@ -42,6 +42,9 @@ pub struct AnimatedMesh {
     moved: f64,
     tracks: Vec<Track>,
     dirty: bool,
+    /// Whether both keyframes are the same pose (blend-in settle, sewing): nothing to
+    /// interpolate, so the surface is refit once, not every substep.
+    still: bool,
     /// Whether every substep interpolates the body between its keyframes and refits the BVH
     /// (exact in time, one refit per substep; the default), or the surface moves to the end
     /// keyframe at the first substep of each frame (one refit per keyframe). Jumping a whole
@@ -66,6 +69,7 @@ impl AnimatedMesh {
             moved: 0.0,
             tracks: Vec::new(),
             dirty: true,
+            still: true,
             interpolate_substeps: true,
         })
     }
@@ -96,6 +100,7 @@ impl AnimatedMesh {
         self.start.copy_from_slice(start);
         self.end.copy_from_slice(end);
         self.dirty = true;
+        self.still = start == end;
         self.times = (t0, t1);
         let inv = 1.0 / (t1 - t0);
         for ((v, a), b) in self.velocity.iter_mut().zip(start).zip(end) {
@@ -161,7 +166,7 @@ impl Obstacle for AnimatedMesh {
     fn advance(&mut self, time: f64) {
         let (t0, t1) = self.times;
         let mut a = ((time - t0) / (t1 - t0)).clamp(0.0, 1.0);
-        if !self.interpolate_substeps {
+        if !self.interpolate_substeps || self.still {
             // Refit once per keyframe: the surface jumps to the end keyframe at the first
             // substep of the frame and stays there.
             if !self.dirty {
