@@ -5,9 +5,10 @@
 //! folds through the bodice: 76-252 crossing triangle pairs per sleeved library design once
 //! the seams have closed (in templates made without this pass, every crossing pair of a top
 //! was within six edges of each other). Self-contact cannot undo a crossing it starts with,
-//! and it ignores a vertex's own neighbours, so these would stay for the whole simulation. Umbrella smoothing of the crossing triangles' vertices opens such creases: the
-//! fold flattens and the two layers part. Crossings between distant parts of the cloth (two
-//! skirt panels through each other) are not creases; smoothing them would distort the garment,
+//! and it ignores a vertex's own neighbours, so these would stay for the whole simulation.
+//! Umbrella smoothing of the crossing triangles' vertices opens such creases: the fold
+//! flattens and the two layers part. Crossings between distant parts of the cloth (two skirt
+//! panels through each other) are not creases; smoothing them would distort the garment,
 //! so the region grows by at most [`MAX_RINGS`] and the pass stops when it stops helping.
 
 use crate::cloth::Vec3;

@@ -168,7 +168,7 @@ impl Obstacle for AnimatedMesh {
         let mut a = ((time - t0) / (t1 - t0)).clamp(0.0, 1.0);
         if !self.interpolate_substeps || self.still {
             // Refit once per keyframe: the surface jumps to the end keyframe at the first
-            // substep of the frame and stays there.
+            // substep of the frame and stays there (for a still pose, where it already is).
             if !self.dirty {
                 return;
             }
