@@ -109,8 +109,8 @@ pub enum GarmentsCommand {
 #[derive(Debug, Args)]
 pub struct DemoArgs {
     /// Output folder (created if missing).
-    #[arg(long)]
-    pub out: PathBuf,
+    #[arg(long, required_unless_present = "print_config")]
+    pub out: Option<PathBuf>,
     #[command(flatten)]
     pub scene: SceneArgs,
     /// Write an OBJ of every K-th frame (0 = none).
@@ -121,54 +121,68 @@ pub struct DemoArgs {
     pub json: Option<PathBuf>,
 }
 
-/// The garment-on-body sequence to simulate.
+/// The garment-on-body sequence to simulate: a scene configuration (the defaults, a `--config`
+/// file or the configuration a recording carries), then these flags over it.
 #[derive(Debug, Args)]
 pub struct SceneArgs {
+    /// Scene configuration file (TOML, the keys `--print-config` prints); flags override its
+    /// values.
+    #[arg(long, conflicts_with = "config_from")]
+    pub config: Option<PathBuf>,
+    /// Start from the configuration a recording carries in its metadata (to simulate it
+    /// again); flags override its values.
+    #[arg(long)]
+    pub config_from: Option<PathBuf>,
+    /// Print the resolved configuration as TOML and exit (nothing is simulated or written).
+    #[arg(long)]
+    pub print_config: bool,
     /// Garment: a library design (see `garments list`; its template is made once and cached),
     /// the built-in skirt (`skirt`, `default`), or a template OBJ with UVs aligned to the
-    /// default body in its canonical A-pose.
-    #[arg(long, default_value = "default")]
-    pub garment: String,
+    /// default body in its canonical A-pose. Default: `default`.
+    #[arg(long)]
+    pub garment: Option<String>,
     /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
-    /// AMASS .npz file.
-    #[arg(long, default_value = "walk")]
-    pub motion: String,
+    /// AMASS .npz file. Default: `walk`.
+    #[arg(long)]
+    pub motion: Option<String>,
     #[command(flatten)]
     pub model: ModelArgs,
     /// Shape coefficients, comma-separated (default: zeros).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    pub betas: Vec<f64>,
-    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset; defaults 100, 0.2, 1e-5).
-    #[arg(long, default_value = "")]
-    pub material: String,
-    /// Cloth-body friction coefficient.
-    #[arg(long, default_value_t = 0.3)]
-    pub friction: f64,
+    pub betas: Option<Vec<f64>>,
+    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset, over the configuration's; defaults
+    /// 100, 0.2, 1e-5).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Cloth-body friction coefficient. Default: 0.3.
+    #[arg(long)]
+    pub friction: Option<f64>,
     /// Output frames to simulate, blend-in and settle included (default: the whole motion).
     #[arg(long)]
     pub frames: Option<usize>,
     /// Frames blending from the canonical pose and shape into the motion's first frame.
-    #[arg(long, default_value_t = 30)]
-    pub blend_frames: usize,
-    /// Frames holding the first frame after the blend.
-    #[arg(long, default_value_t = 30)]
-    pub settle_frames: usize,
-    /// Substeps per 30 fps frame.
-    #[arg(long, default_value_t = 4)]
-    pub substeps: usize,
+    /// Default: 30.
+    #[arg(long)]
+    pub blend_frames: Option<usize>,
+    /// Frames holding the first frame after the blend. Default: 30.
+    #[arg(long)]
+    pub settle_frames: Option<usize>,
+    /// Substeps per 30 fps frame. Default: 4.
+    #[arg(long)]
+    pub substeps: Option<usize>,
     /// Maximum solver iterations per substep (with self-contact, up to 4x this in a step
-    /// whose layers would otherwise cross).
-    #[arg(long, default_value_t = 16)]
-    pub iterations: usize,
+    /// whose layers would otherwise cross). Default: 16.
+    #[arg(long)]
+    pub iterations: Option<usize>,
     /// Turns cloth-cloth contact off (it is on for garment scenes).
     #[arg(long)]
     pub no_self_contact: bool,
-    /// Gap self-contact keeps between layers of the garment, m.
-    #[arg(long, default_value_t = 0.004)]
-    pub self_contact_distance: f64,
-    /// Coulomb friction coefficient between layers of the garment.
-    #[arg(long, default_value_t = 0.3)]
-    pub self_friction: f64,
+    /// Gap self-contact keeps between layers of the garment, m. Default: 0.004.
+    #[arg(long)]
+    pub self_contact_distance: Option<f64>,
+    /// Coulomb friction coefficient between layers of the garment. Default: 0.3.
+    #[arg(long)]
+    pub self_friction: Option<f64>,
 }
 
 #[derive(Debug, Args)]
@@ -176,13 +190,14 @@ pub struct SimulateArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
     /// Output recording (.mcap).
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Also record the body vertices of every frame (large).
+    #[arg(long, required_unless_present = "print_config")]
+    pub out: Option<PathBuf>,
+    /// Also record the body vertices of every frame (large; `record.body_vertices`).
     #[arg(long)]
     pub body_vertices: bool,
     /// Also record a `foxglove.SceneUpdate` channel (`/foxglove/scene`: garment and body
-    /// triangle lists, z up) so the sequence plays in Foxglove's 3D panel (large).
+    /// triangle lists, z up) so the sequence plays in Foxglove's 3D panel (large;
+    /// `record.foxglove`).
     #[arg(long)]
     pub foxglove: bool,
     /// Write every frame's garment (and body) as OBJ into this folder.

@@ -81,28 +81,6 @@ impl BodyParams {
     }
 }
 
-/// A material from `k_s=..,rho=..,k_b=..` (any subset, the rest default), checked.
-pub fn material(text: &str) -> Result<sim::Material> {
-    let mut m = sim::Material::default();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let (key, value) = part.split_once('=').with_context(|| {
-            format!("--material: '{part}' is not key=value (keys k_s, rho, k_b)")
-        })?;
-        let value: f64 = value
-            .trim()
-            .parse()
-            .with_context(|| format!("--material: '{value}' is not a number"))?;
-        match key.trim() {
-            "k_s" => m.stretch = value,
-            "rho" => m.density = value,
-            "k_b" => m.bending = value,
-            other => bail!("--material: unknown key '{other}' (keys k_s N/m, rho kg/m^2, k_b N m)"),
-        }
-    }
-    m.validate()?;
-    Ok(m)
-}
-
 /// A garment template and its body attachments: a library design (sewn on `model` once and
 /// cached, see [`library_template`]), the built-in skirt fitted to `model` and draped
 /// ([`sim::scene::builtin_template`]), or an OBJ file with UVs (checked and repaired, no

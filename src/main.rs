@@ -4,9 +4,11 @@
 
 mod cli;
 mod commands;
+mod dataset_dir;
 mod inputs;
 mod output;
-mod recording;
+mod pictures;
+mod run;
 
 use std::process::ExitCode;
 

@@ -47,7 +47,7 @@ fn demo_writes_a_readable_sequence_and_summary() {
     assert_eq!(counts["/garment/template/uvs"], 1);
     let recording = sim::recording::Recording::read(&out.join("sequence.mcap")).unwrap();
     assert_eq!(recording.garment.len(), 8);
-    assert_eq!(recording.meta.unwrap().material.k_s_n_per_m, 100.0);
+    assert_eq!(recording.meta.unwrap().material.stretch, 100.0);
     assert!(out.join("frames/garment_0004.obj").exists());
     assert!(out.join("frames/body_0004.obj").exists());
     for preview in [

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 
-use crate::error::{Error, Result};
+use crate::error::{MeshError, Result};
 
 /// 3-vector of f64, the engine's one vector type.
 pub type Vec3 = Vector3<f64>;
@@ -25,26 +25,32 @@ impl ClothMesh {
     /// no degenerate triangle (area below 1e-12 m^2) and every vertex used.
     pub fn new(rest: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Result<Self> {
         if triangles.is_empty() {
-            return Err(Error::Mesh("no triangles".into()));
+            return Err(MeshError::NoTriangles.into());
         }
         let n = rest.len();
         if let Some(i) = rest.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(Error::Mesh(format!("vertex {i} is not finite")));
+            return Err(MeshError::NonFiniteVertex { vertex: i }.into());
         }
         let mut used = vec![false; n];
         let mut edge_set = BTreeMap::new();
         let mut areas = Vec::with_capacity(triangles.len());
         for (t, tri) in triangles.iter().enumerate() {
-            if tri.iter().any(|&v| v as usize >= n) {
-                return Err(Error::Mesh(format!(
-                    "triangle {t} refers to vertex {:?} but there are {n} vertices",
-                    tri
-                )));
+            if let Some(&vertex) = tri.iter().find(|&&v| v as usize >= n) {
+                return Err(MeshError::MissingVertex {
+                    triangle: t,
+                    vertex,
+                    vertices: n,
+                }
+                .into());
             }
             let [a, b, c] = tri.map(|v| rest[v as usize]);
             let area = 0.5 * (b - a).cross(&(c - a)).norm();
             if area < 1e-12 {
-                return Err(Error::Mesh(format!("triangle {t} {tri:?} is degenerate")));
+                return Err(MeshError::Degenerate {
+                    triangle: t,
+                    corners: *tri,
+                }
+                .into());
             }
             areas.push(area);
             for k in 0..3 {
@@ -54,7 +60,7 @@ impl ClothMesh {
             }
         }
         if let Some(i) = used.iter().position(|u| !u) {
-            return Err(Error::Mesh(format!("vertex {i} is used by no triangle")));
+            return Err(MeshError::UnusedVertex { vertex: i }.into());
         }
         Ok(Self {
             rest,
@@ -129,9 +135,7 @@ impl ClothMesh {
     /// y = 0, odd rows shifted by half a spacing. Vertex index row * columns + column.
     pub fn equilateral(columns: usize, rows: usize, spacing: f64) -> Result<Self> {
         if columns < 2 || rows < 2 {
-            return Err(Error::Mesh(format!(
-                "sheet needs at least 2 x 2 vertices, got {columns} x {rows}"
-            )));
+            return Err(MeshError::GridTooSmall { columns, rows }.into());
         }
         let dy = spacing * 3f64.sqrt() / 2.0;
         let mut rest = Vec::with_capacity(columns * rows);
@@ -162,7 +166,11 @@ impl ClothMesh {
     /// (the peer simulators' drape-scene layout).
     pub fn grid(n: usize, size: f64, y: f64) -> Result<Self> {
         if n < 2 {
-            return Err(Error::Mesh(format!("grid needs n >= 2, got {n}")));
+            return Err(MeshError::GridTooSmall {
+                columns: n,
+                rows: n,
+            }
+            .into());
         }
         let step = size / (n - 1) as f64;
         let mut rest = Vec::with_capacity(n * n);

@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::constraints::bending::RIGIDITY_PER_KB;
 use crate::error::Result;
-use crate::obstacles::{Obstacle, Sphere};
+use crate::obstacles::{Obstacles, Sphere};
 use crate::params::{Material, SolverParams};
 use crate::solver::{ClothSetup, Solver, StageTimes};
 
@@ -72,11 +72,12 @@ impl DrapeBench {
             1.0 / 30.0,
         )?;
         let setup_s = setup_started.elapsed().as_secs_f64();
-        let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(Sphere::new(
+        let sphere = Sphere::new(
             Vec3::new(0.0, SPHERE_CENTER_HEIGHT, 0.0),
             SPHERE_RADIUS,
             0.3,
-        ))];
+        );
+        let mut obstacles = Obstacles::props(vec![Box::new(sphere)]);
         let mut state = ClothState::at_rest(mesh.rest().to_vec());
         let mut trajectory = Vec::with_capacity(60);
         let mut iterations = 0;

@@ -4,11 +4,14 @@
 //! Bertails-Descoubes, "Projective Dynamics with Dry Frictional Contact" (2020).
 //!
 //! Data: a [`ClothMesh`] and [`Material`] make a [`ClothSetup`]; a [`Solver`] holds its
-//! factorized global matrix and advances a [`ClothState`] against [`obstacles`]. Units are SI,
-//! y is up.
+//! factorized global matrix and advances a [`ClothState`] against [`obstacles::Obstacles`].
+//! A garment sequence is a [`SceneConfig`] (plain data, TOML) resolved into a
+//! [`scene::Scene`], run frame by frame and written by [`recording::SequenceWriter`]. Units
+//! are SI, y is up.
 #![warn(missing_docs)]
 
 mod cloth;
+pub mod config;
 pub mod constraints;
 mod contact;
 pub mod dataset;
@@ -28,12 +31,13 @@ mod system;
 mod untangle;
 
 pub use cloth::{ClothMesh, ClothState, Vec3};
+pub use config::SceneConfig;
 pub use constraints::{Attachment, BendingRest, Seam, Spring};
 pub use contact::Contact;
-pub use error::{Error, Result};
+pub use error::{Error, MeshError, Result};
 pub use params::{Material, SolverParams};
 pub use self_intersection::{count_self_intersections, self_intersecting_pairs};
-pub use solver::{ClothSetup, FrameReport, Solver, StageTimes, StepReport};
+pub use solver::{ClothSetup, FrameReport, Solver, Stage, StageTimes, StepReport};
 pub use system::Symbolic;
 pub use untangle::{UntangleReport, untangle};
 

@@ -5,17 +5,23 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-/// Cloth material, the three quantities the datasets sample.
+/// Cloth material, the three quantities the datasets sample: the one material type of the
+/// project (command line, scene configuration, dataset plan, recordings and the surrogate's
+/// conditions). Its serialized names carry the units, as recordings write them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Material {
     /// Edge spring stiffness k_s, N/m (energy (k_s/2)(|x_i - x_j| - L0)^2 per edge). On an
     /// equilateral mesh the membrane Young's modulus is E_2D = 2 k_s / sqrt(3). Default 100.
+    #[serde(rename = "k_s_n_per_m")]
     pub stretch: f64,
     /// Area density rho, kg/m^2 (lumped: a vertex carries a third of its triangles' areas).
     /// Default 0.2.
+    #[serde(rename = "rho_kg_per_m2")]
     pub density: f64,
     /// Bending stiffness k_b, N m (Laplacian bending; plate rigidity B = 2 sqrt(3) k_b on
     /// near-equilateral meshes, see docs/PHYSICS.md). Default 1e-5.
+    #[serde(rename = "k_b_n_m")]
     pub bending: f64,
 }
 
@@ -30,25 +36,50 @@ impl Default for Material {
 }
 
 impl Material {
-    /// Checks that every value is finite and positive.
+    /// Checks that every value is finite and positive; the error names the configuration key.
     pub fn validate(&self) -> Result<()> {
-        for (name, value, unit) in [
-            ("k_s (stretch)", self.stretch, "N/m"),
-            ("rho (density)", self.density, "kg/m^2"),
-            ("k_b (bending)", self.bending, "N m"),
+        for (key, value, unit) in [
+            ("material.k_s_n_per_m", self.stretch, "N/m"),
+            ("material.rho_kg_per_m2", self.density, "kg/m^2"),
+            ("material.k_b_n_m", self.bending, "N m"),
         ] {
             if !value.is_finite() || value <= 0.0 {
-                return Err(Error::Material(format!(
-                    "{name} must be a finite positive number of {unit}, got {value}"
-                )));
+                return Err(Error::value(
+                    key,
+                    value,
+                    &format!("must be a finite positive number of {unit}"),
+                ));
             }
         }
         Ok(())
+    }
+
+    /// This material with the values of `k_s=..,rho=..,k_b=..` (any subset, the command line's
+    /// `--material`) put in; not validated (the scene configuration is, once).
+    pub fn with_overrides(mut self, text: &str) -> Result<Self> {
+        let bad = |value: &str, expected: &str| Error::value("--material", value, expected);
+        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (key, value) = part
+                .split_once('=')
+                .ok_or_else(|| bad(part, "must be key=value (keys k_s, rho, k_b)"))?;
+            let number: f64 = value
+                .trim()
+                .parse()
+                .map_err(|_| bad(part, "the value is not a number"))?;
+            match key.trim() {
+                "k_s" => self.stretch = number,
+                "rho" => self.density = number,
+                "k_b" => self.bending = number,
+                _ => return Err(bad(part, "unknown key (keys k_s N/m, rho kg/m^2, k_b N m)")),
+            }
+        }
+        Ok(self)
     }
 }
 
 /// Solver settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SolverParams {
     /// Substeps per output frame (the time step is frame time / substeps). Default 4.
     pub substeps: usize,
@@ -121,45 +152,73 @@ impl SolverParams {
     /// Checks ranges: counts at least 1, lengths and speeds finite and non-negative, the
     /// contact offset below the detection band.
     pub fn validate(&self) -> Result<()> {
-        if self.substeps == 0 || self.max_iterations == 0 {
-            return Err(Error::Setting(
-                "substeps and max_iterations must be at least 1".into(),
+        for (key, value) in [
+            ("solver.substeps", self.substeps),
+            ("solver.max_iterations", self.max_iterations),
+        ] {
+            if value == 0 {
+                return Err(Error::value(key, value, "must be at least 1"));
+            }
+            if value > MAX_STEP_COUNT {
+                return Err(Error::value(
+                    key,
+                    value,
+                    &format!("must be at most {MAX_STEP_COUNT}"),
+                ));
+            }
+        }
+        if self.max_retries > MAX_RETRIES {
+            return Err(Error::value(
+                "solver.max_retries",
+                self.max_retries,
+                &format!("must be at most {MAX_RETRIES} (each retry doubles the substeps)"),
             ));
         }
-        for (name, value) in [
-            ("tolerance", self.tolerance),
-            ("contact_tolerance", self.contact_tolerance),
-            ("contact_offset", self.contact_offset),
-            ("max_push_out_speed", self.max_push_out_speed),
-            ("air_damping", self.air_damping),
-            ("gravity", self.gravity),
-            ("max_speed", self.max_speed),
-            ("self_contact_distance", self.self_contact_distance),
-            ("self_friction", self.self_friction),
+        for (key, value) in [
+            ("solver.tolerance", self.tolerance),
+            ("solver.contact_tolerance", self.contact_tolerance),
+            ("solver.contact_offset", self.contact_offset),
+            ("solver.max_push_out_speed", self.max_push_out_speed),
+            ("solver.air_damping", self.air_damping),
+            ("solver.gravity", self.gravity),
+            ("solver.max_speed", self.max_speed),
+            ("solver.self_contact_distance", self.self_contact_distance),
+            ("solver.self_friction", self.self_friction),
         ] {
             if !value.is_finite() || value < 0.0 {
-                return Err(Error::Setting(format!(
-                    "{name} must be finite and non-negative, got {value}"
-                )));
+                return Err(Error::value(key, value, "must be finite and non-negative"));
             }
         }
         if self.contact_offset >= self.contact_tolerance && self.contact_tolerance > 0.0 {
-            return Err(Error::Setting(format!(
-                "contact_offset ({} m) must be smaller than contact_tolerance ({} m)",
-                self.contact_offset, self.contact_tolerance
-            )));
+            return Err(Error::value(
+                "solver.contact_offset",
+                self.contact_offset,
+                &format!(
+                    "must be smaller than solver.contact_tolerance ({} m)",
+                    self.contact_tolerance
+                ),
+            ));
         }
         if self.self_contact && self.self_contact_distance == 0.0 {
-            return Err(Error::Setting(
-                "self_contact_distance must be positive when self-contact is on".into(),
+            return Err(Error::value(
+                "solver.self_contact_distance",
+                0,
+                "must be positive when self-contact is on",
             ));
         }
         if self.max_speed == 0.0 {
-            return Err(Error::Setting("max_speed must be positive".into()));
+            return Err(Error::value("solver.max_speed", 0, "must be positive"));
         }
         Ok(())
     }
 }
+
+/// Largest substep or iteration count a configuration may ask for (larger values are typos
+/// that would run for days).
+pub const MAX_STEP_COUNT: usize = 4096;
+
+/// Largest retry count (each retry doubles the substeps of the frame).
+pub const MAX_RETRIES: usize = 8;
 
 #[cfg(test)]
 mod tests {
@@ -174,7 +233,7 @@ mod tests {
             ..Material::default()
         };
         let message = bad.validate().unwrap_err().to_string();
-        assert!(message.contains("k_s"), "{message}");
+        assert!(message.contains("material.k_s_n_per_m = -1"), "{message}");
         let zero = Material {
             density: 0.0,
             ..Material::default()
@@ -190,5 +249,14 @@ mod tests {
             ..SolverParams::default()
         };
         assert!(params.validate().is_err());
+        let m = Material::default()
+            .with_overrides("k_s=150, rho=0.3")
+            .unwrap();
+        assert_eq!((m.stretch, m.density, m.bending), (150.0, 0.3, 1e-5));
+        let message = Material::default()
+            .with_overrides("k_x=1")
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("k_x=1"), "{message}");
     }
 }

@@ -13,35 +13,30 @@ use motions::{BlendIn, BodyModel, FramePose, Motion, PosedBody, canonical_a_pose
 use serde::{Deserialize, Serialize};
 
 use crate::cloth::{ClothMesh, ClothState, Vec3, closest_on_triangle};
+use crate::config::SceneConfig;
 use crate::error::{Error, Result};
-use crate::obstacles::{AnimatedMesh, Obstacle, Plane};
+use crate::obstacles::{AnimatedMesh, Obstacles, Plane};
 use crate::params::{Material, SolverParams};
+use crate::recording::{FrameRecord, SequenceMeta, UNITS};
 use crate::solver::{ClothSetup, FrameReport, Solver, StageTimes};
 
 /// Output frame rate, frames per second.
 pub const FPS: f64 = 30.0;
 
-/// Everything that defines a garment sequence.
+/// A garment sequence ready to run: its configuration (validated by [`Scene::new`]) and what
+/// the configuration names, loaded: the template, its body attachments and the motion.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The configuration (material, friction, frames, blend-in, solver settings).
+    pub config: SceneConfig,
     /// Template rest positions (draped on the canonical body), m.
     pub template: Vec<[f64; 3]>,
     /// Template triangles.
     pub triangles: Vec<[u32; 3]>,
-    /// Body shape.
+    /// Body shape, as many coefficients as the body model has.
     pub betas: Vec<f64>,
     /// The motion at 30 fps (the blend-in is added by the runner).
     pub motion: Motion,
-    /// Blend-in and settle frames.
-    pub blend: BlendIn,
-    /// Cloth material.
-    pub material: Material,
-    /// Cloth-body friction coefficient.
-    pub friction: f64,
-    /// Solver settings.
-    pub params: SolverParams,
-    /// Output frames to simulate (blend-in and settle included); `None` = the whole motion.
-    pub frames: Option<usize>,
     /// Cloth vertices held to body surface points (an elastic waistband), see
     /// [`attach_to_body`].
     pub attachments: Vec<BodyAttachment>,
@@ -105,9 +100,11 @@ pub fn attach_to_body(
     let faces = model.faces();
     let mut out = Vec::with_capacity(vertices.len());
     for &v in vertices {
-        let p = template
-            .get(v as usize)
-            .ok_or_else(|| Error::Setting(format!("attachment vertex {v} does not exist")))?;
+        let p = template.get(v as usize).ok_or_else(|| Error::Constraint {
+            kind: "attachment",
+            index: out.len(),
+            problem: format!("vertex {v} does not exist ({} vertices)", template.len()),
+        })?;
         let p = Vec3::new(p[0], p[1], p[2]);
         let mut best = (f64::INFINITY, 0u32, [0.0; 3]);
         for (t, f) in faces.iter().enumerate() {
@@ -194,7 +191,7 @@ pub struct FrameOutput<'a> {
     /// Frame index.
     pub index: usize,
     /// Garment vertex positions, m.
-    pub garment: &'a [Vec3],
+    pub garment: &'a [[f64; 3]],
     /// Body pose of the frame (after blend-in).
     pub pose: &'a FramePose,
     /// Body shape of the frame (ramped during the blend-in).
@@ -203,6 +200,23 @@ pub struct FrameOutput<'a> {
     pub body: &'a PosedBody,
     /// Statistics.
     pub stats: &'a FrameStats,
+}
+
+impl FrameOutput<'_> {
+    /// The frame as the recording writer takes it: garment, pose, shape, body vertices and
+    /// statistics.
+    pub fn record(&self) -> FrameRecord<'_> {
+        FrameRecord {
+            index: self.index,
+            garment: Some(self.garment),
+            pose: &self.pose.pose,
+            transl: self.pose.transl,
+            betas: self.betas,
+            body_vertices: Some(&self.body.vertices),
+            joints: None,
+            stats: Some(self.stats),
+        }
+    }
 }
 
 /// Summary of a run.
@@ -233,39 +247,9 @@ pub struct RunSummary {
     /// Frames that needed smaller steps.
     pub retried_frames: usize,
     /// Where the time went, s per stage.
-    pub stages: StageSeconds,
+    pub stages: StageTimes,
     /// Time spent posing the body (forward pass), s.
     pub posing_s: f64,
-}
-
-/// Stage times in seconds.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct StageSeconds {
-    /// Prediction.
-    pub predict: f64,
-    /// Obstacle update (BVH refit) and contact detection.
-    pub detect: f64,
-    /// Local projections and right-hand side.
-    pub local: f64,
-    /// Contact impulses and residuals.
-    pub contact: f64,
-    /// Global solves.
-    pub solve: f64,
-    /// Factorizations.
-    pub factorize: f64,
-}
-
-impl From<StageTimes> for StageSeconds {
-    fn from(t: StageTimes) -> Self {
-        Self {
-            predict: t.predict.as_secs_f64(),
-            detect: t.detect.as_secs_f64(),
-            local: t.local.as_secs_f64(),
-            contact: t.contact.as_secs_f64(),
-            solve: t.solve.as_secs_f64(),
-            factorize: t.factorize.as_secs_f64(),
-        }
-    }
 }
 
 fn to_vec3(p: &[[f64; 3]]) -> Vec<Vec3> {
@@ -286,52 +270,91 @@ pub fn edge_stretch(mesh: &ClothMesh, positions: &[Vec3]) -> (f64, f64) {
 }
 
 impl Scene {
-    /// Checks the scene's values.
-    pub fn validate(&self, model: &BodyModel) -> Result<()> {
-        self.material.validate()?;
-        self.params.validate()?;
-        if !(self.friction.is_finite() && self.friction >= 0.0) {
-            return Err(Error::Material(format!(
-                "friction must be finite and >= 0, got {}",
-                self.friction
-            )));
+    /// A scene from its configuration, which is validated here (the one check of its values on
+    /// the way to the solver), and what it names, loaded: the template (rest positions and
+    /// triangles), its attachments and the motion. Checks the motion and that the body is
+    /// closed (the inside test needs it).
+    pub fn new(
+        config: SceneConfig,
+        template: (Vec<[f64; 3]>, Vec<[u32; 3]>),
+        attachments: Vec<BodyAttachment>,
+        motion: Motion,
+        model: &BodyModel,
+    ) -> Result<Self> {
+        config.validate()?;
+        if motion.is_empty() {
+            return Err(Error::EmptyMotion {
+                motion: motion.name.clone(),
+            });
         }
-        if let Some(i) = self.betas.iter().position(|b| !b.is_finite()) {
-            return Err(Error::Setting(format!("beta {i} is not finite")));
-        }
-        if self.motion.is_empty() {
-            return Err(Error::Setting("the motion has no frames".into()));
-        }
-        if let Some(k) = self
-            .motion
+        if let Some(frame) = motion
             .frames
             .iter()
             .position(|f| !f.pose.iter().chain(&f.transl).all(|v| v.is_finite()))
         {
-            return Err(Error::Setting(format!(
-                "motion '{}' frame {k} has a non-finite value",
-                self.motion.name
-            )));
+            return Err(Error::NonFiniteMotion {
+                motion: motion.name.clone(),
+                frame,
+            });
         }
         let open = model.boundary_edge_count();
         if open > 0 {
-            return Err(Error::Obstacle(format!(
-                "body model '{}' is not closed ({open} boundary edges): the inside test needs a closed body",
-                model.name()
-            )));
+            return Err(Error::Obstacle {
+                obstacle: format!("body model '{}'", model.name()),
+                problem: format!(
+                    "not closed ({open} boundary edges): the inside test needs a closed body"
+                ),
+            });
         }
-        Ok(())
+        let betas = model.shape(&config.betas)?.betas;
+        Ok(Self {
+            config,
+            template: template.0,
+            triangles: template.1,
+            betas,
+            motion,
+            attachments,
+        })
+    }
+
+    /// Blend-in and settle frames.
+    pub fn blend(&self) -> BlendIn {
+        BlendIn {
+            blend_frames: self.config.blend_frames,
+            settle_frames: self.config.settle_frames,
+        }
+    }
+
+    /// The metadata of this scene's recording.
+    pub fn sequence_meta(&self, garment: &str, body_model: &str, software: &str) -> SequenceMeta {
+        SequenceMeta {
+            software: software.to_string(),
+            garment: garment.to_string(),
+            motion: self.motion.name.clone(),
+            body_model: body_model.to_string(),
+            betas: self.betas.clone(),
+            fps: FPS,
+            frames: self.num_frames(),
+            blend_frames: self.config.blend_frames,
+            settle_frames: self.config.settle_frames,
+            material: self.config.material,
+            friction: self.config.friction,
+            seed: self.config.seed,
+            solver: self.config.solver,
+            units: UNITS.into(),
+            config: Some(self.config.clone()),
+        }
     }
 
     /// The full motion the body follows (blend-in and settle prefix included).
     pub fn body_motion(&self) -> Motion {
-        self.motion.with_blend_in(&canonical_a_pose(), self.blend)
+        self.motion.with_blend_in(&canonical_a_pose(), self.blend())
     }
 
     /// Number of output frames.
     pub fn num_frames(&self) -> usize {
         let all = self.body_motion().len();
-        self.frames.map_or(all, |f| f.min(all))
+        self.config.frames.map_or(all, |f| f.min(all))
     }
 
     /// Runs the scene, handing every output frame (frame 0 = the template) to `on_frame`.
@@ -340,16 +363,16 @@ impl Scene {
         model: &BodyModel,
         mut on_frame: impl FnMut(&FrameOutput) -> Result<()>,
     ) -> Result<RunSummary> {
-        self.validate(model)?;
         let started = Instant::now();
+        let blend = self.blend();
         let motion = self.body_motion();
         let frames = self.num_frames();
         let target = model.shape(&self.betas)?;
         let betas_at = |k: usize| -> Vec<f64> {
-            let ramp = if self.blend.blend_frames == 0 {
+            let ramp = if blend.blend_frames == 0 {
                 1.0
             } else {
-                (k as f64 / self.blend.blend_frames as f64).min(1.0)
+                (k as f64 / blend.blend_frames as f64).min(1.0)
             };
             target.betas.iter().map(|b| b * ramp).collect()
         };
@@ -357,7 +380,7 @@ impl Scene {
         let mut pose_frame = |k: usize| -> Result<(Vec<f64>, PosedBody)> {
             let t = Instant::now();
             let betas = betas_at(k);
-            let shaped = if k >= self.blend.blend_frames {
+            let shaped = if k >= blend.blend_frames {
                 target.clone()
             } else {
                 model.shape(&betas)?
@@ -375,8 +398,8 @@ impl Scene {
             .collect();
         let mesh = ClothMesh::new(to_vec3(&self.template), self.triangles.clone())?;
         let mut solver = Solver::new(
-            cloth_setup(mesh.clone(), self.material, &self.attachments),
-            self.params,
+            cloth_setup(mesh.clone(), self.config.material, &self.attachments),
+            self.config.solver,
             1.0 / FPS,
         )?;
         let mut state = ClothState::at_rest(start);
@@ -389,7 +412,7 @@ impl Scene {
         ));
         let body_vertices = to_vec3(&body.vertices);
         let floor = body_vertices.iter().fold(f64::INFINITY, |a, p| a.min(p.y));
-        let mut animated = AnimatedMesh::new(&body_vertices, model.faces(), self.friction)?;
+        let mut animated = AnimatedMesh::new(&body_vertices, model.faces(), self.config.friction)?;
         let mut stats = self.measure(
             &mesh,
             &state,
@@ -399,19 +422,20 @@ impl Scene {
             FrameReport::default(),
             0.0,
         );
+        let mut garment: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
         on_frame(&FrameOutput {
             index: 0,
-            garment: &state.positions,
+            garment: &garment,
             pose: &motion.frames[0],
             betas: &betas,
             body: &body,
             stats: &stats,
         })?;
 
-        let mut obstacles: Vec<Box<dyn Obstacle>> = vec![
-            Box::new(animated),
-            Box::new(Plane::ground(floor, self.friction)),
-        ];
+        let mut obstacles = Obstacles {
+            ground: Some(Plane::ground(floor, self.config.friction)),
+            ..Obstacles::body(animated)
+        };
         let mut summary = RunSummary {
             vertices: mesh.num_vertices(),
             finite: true,
@@ -426,7 +450,8 @@ impl Scene {
             (betas, body) = pose_frame(k)?;
             let next = to_vec3(&body.vertices);
             let t0 = (k - 1) as f64 / FPS;
-            body_obstacle(&mut obstacles).set_keyframes(&previous, &next, t0, t0 + 1.0 / FPS)?;
+            let body_obstacle = scene_body(&mut obstacles)?;
+            body_obstacle.set_keyframes(&previous, &next, t0, t0 + 1.0 / FPS)?;
             solver.set_attachment_targets(&attachment_targets(
                 &self.attachments,
                 &body.vertices,
@@ -438,19 +463,15 @@ impl Scene {
             summary.deep_contacts += report.deep_contacts;
             summary.retried_frames += (report.retries > 0) as usize;
             let wall = frame_started.elapsed().as_secs_f64();
-            stats = self.measure(
-                &mesh,
-                &state,
-                &solver,
-                body_obstacle(&mut obstacles),
-                k,
-                report,
-                wall,
-            );
+            let body_obstacle = scene_body(&mut obstacles)?;
+            stats = self.measure(&mesh, &state, &solver, body_obstacle, k, report, wall);
             accumulate(&mut summary, &stats);
+            for (g, p) in garment.iter_mut().zip(&state.positions) {
+                *g = [p.x, p.y, p.z];
+            }
             on_frame(&FrameOutput {
                 index: k,
-                garment: &state.positions,
+                garment: &garment,
                 pose: &motion.frames[k],
                 betas: &betas,
                 body: &body,
@@ -462,7 +483,7 @@ impl Scene {
         summary.wall_s = started.elapsed().as_secs_f64();
         summary.frames_per_s = frames as f64 / summary.wall_s;
         summary.mean_iterations = iterations as f64 / steps.max(1) as f64;
-        summary.stages = solver.take_times().into();
+        summary.stages = solver.take_times();
         summary.posing_s = posing;
         Ok(summary)
     }
@@ -498,18 +519,19 @@ impl Scene {
     }
 }
 
+/// The body of a scene's obstacles (always there: the runner puts it in).
+fn scene_body(obstacles: &mut Obstacles) -> Result<&mut AnimatedMesh> {
+    obstacles.body.as_mut().ok_or_else(|| Error::Obstacle {
+        obstacle: "body".into(),
+        problem: "the scene has no body".into(),
+    })
+}
+
 fn accumulate(summary: &mut RunSummary, stats: &FrameStats) {
     summary.max_penetration_m = summary.max_penetration_m.max(stats.max_penetration_m);
     summary.max_verts_inside = summary.max_verts_inside.max(stats.vertices_inside);
     summary.max_edge_stretch = summary.max_edge_stretch.max(stats.max_edge_stretch);
     summary.max_self_intersections = summary.max_self_intersections.max(stats.self_intersections);
-}
-
-fn body_obstacle(obstacles: &mut [Box<dyn Obstacle>]) -> &mut AnimatedMesh {
-    obstacles[0]
-        .as_any_mut()
-        .downcast_mut::<AnimatedMesh>()
-        .expect("the first obstacle is the body")
 }
 
 /// Drapes a garment on the default shape in the canonical A-pose (no root translation):
@@ -543,11 +565,7 @@ pub fn drape_on_canonical_body(
         model.faces(),
     ));
     let vertices = to_vec3(&body.vertices);
-    let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(AnimatedMesh::new(
-        &vertices,
-        model.faces(),
-        friction,
-    )?)];
+    let mut obstacles = Obstacles::body(AnimatedMesh::new(&vertices, model.faces(), friction)?);
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     for k in 0..frames {
         solver.advance_frame(&mut state, &mut obstacles, k as f64 / FPS, k)?;
@@ -571,8 +589,10 @@ pub fn builtin_template(
     params: &garments::SkirtParams,
 ) -> Result<(garments::Garment, Vec<BodyAttachment>)> {
     let body = canonical_body(model)?;
-    let raw =
-        garments::skirt(name, &body.vertices, params).map_err(|e| Error::Setting(e.to_string()))?;
+    let raw = garments::skirt(name, &body.vertices, params).map_err(|e| Error::Garment {
+        garment: name.to_string(),
+        problem: e.to_string(),
+    })?;
     let waist: Vec<u32> = (0..params.columns as u32).collect();
     let attachments = attach_to_body(model, &raw.positions, &waist, WAISTBAND_STIFFNESS)?;
     let (draped, _) = drape_on_canonical_body(

@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::constraints::Seam;
 use crate::error::{Error, Result};
-use crate::obstacles::{AnimatedMesh, Obstacle};
+use crate::obstacles::{AnimatedMesh, Obstacles};
 use crate::params::{Material, SolverParams};
 use crate::scene::{FPS, canonical_body, edge_stretch};
 use crate::self_intersection::count_self_intersections;
@@ -288,11 +288,8 @@ pub fn sew(
         .iter()
         .map(|p| Vec3::new(p[0], p[1], p[2]))
         .collect();
-    let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(AnimatedMesh::new(
-        &body_vertices,
-        model.faces(),
-        options.friction,
-    )?)];
+    let body_obstacle = AnimatedMesh::new(&body_vertices, model.faces(), options.friction)?;
+    let mut obstacles = Obstacles::body(body_obstacle);
     let mut state = ClothState::at_rest(rest);
     let gap = |state: &ClothState| {
         let p: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
@@ -360,13 +357,14 @@ pub fn sew(
     let max_seam_gap_m = gap(&state);
     let (max_edge_stretch, _) = edge_stretch(&mesh, &state.positions);
     let draped: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let template = sewn
-        .merged(&draped)
-        .map_err(|e| Error::Setting(format!("merging seams: {e}")))?;
-    let body_mesh = obstacles[0]
-        .as_any_mut()
-        .downcast_mut::<AnimatedMesh>()
-        .ok_or_else(|| Error::Setting("the body obstacle is missing".into()))?;
+    let template = sewn.merged(&draped).map_err(|e| Error::Garment {
+        garment: sewn.garment.name.clone(),
+        problem: format!("merging seams: {e}"),
+    })?;
+    let body_mesh = obstacles.body.as_mut().ok_or_else(|| Error::Obstacle {
+        obstacle: "body".into(),
+        problem: "missing from the sewing scene".into(),
+    })?;
     let merged: Vec<Vec3> = template
         .positions
         .iter()

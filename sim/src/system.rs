@@ -109,7 +109,7 @@ impl GlobalSystem {
             }
         }
         let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower)
-            .map_err(|e| Error::Factorization(format!("assembly: {e:?}")))?;
+            .map_err(|e| factorization("assembly", e))?;
         let symbolic = match symbolic {
             Some(s) if s.nrows() == n => s,
             _ => Arc::new(
@@ -119,7 +119,7 @@ impl GlobalSystem {
                     Default::default(),
                     Default::default(),
                 )
-                .map_err(|e| Error::Factorization(format!("symbolic: {e:?}")))?,
+                .map_err(|e| factorization("symbolic", e))?,
             ),
         };
         let mut factor = vec![0.0; symbolic.len_val()];
@@ -136,7 +136,7 @@ impl GlobalSystem {
                 MemStack::new(&mut stack),
                 Default::default(),
             )
-            .map_err(|e| Error::Factorization(format!("numeric: {e:?}")))?;
+            .map_err(|e| factorization("numeric", e))?;
         let scratch = [
             MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
             MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(2, Par::Seq)),
@@ -224,4 +224,10 @@ impl GlobalSystem {
 
 fn solve_columns(llt: &LltRef<'_, usize, f64>, cols: MatMut<'_, f64>, scratch: &mut MemBuffer) {
     llt.solve_in_place_with_conj(Conj::No, cols, Par::Seq, MemStack::new(scratch));
+}
+fn factorization(stage: &'static str, e: impl std::fmt::Debug) -> Error {
+    Error::Factorization {
+        stage,
+        message: format!("{e:?}"),
+    }
 }

@@ -23,7 +23,12 @@ fn blow_up_is_retried_then_reported() {
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     let before = state.clone();
     let error = solver
-        .advance_frame(&mut state, &mut [], 0.0, 7)
+        .advance_frame(
+            &mut state,
+            &mut sim::obstacles::Obstacles::default(),
+            0.0,
+            7,
+        )
         .unwrap_err()
         .to_string();
     assert!(

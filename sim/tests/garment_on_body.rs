@@ -1,10 +1,10 @@
 //! A garment rides a walking and a jumping body without falling through or falling off: the
 //! built-in skirt (waistband attached) on the default body, penetration at most 1 cm.
 
+use motions::BodyModel;
 use motions::library::MotionSpec;
-use motions::{BlendIn, BodyModel};
 use sim::scene::{Scene, builtin_template};
-use sim::{Material, SolverParams};
+use sim::{SceneConfig, SolverParams};
 
 /// The built-in skirt with `skirt` proportions on the default body through `motion`.
 fn skirt_scene(
@@ -20,21 +20,17 @@ fn skirt_scene(
         .unwrap()
         .generate(model, &shaped)
         .unwrap();
-    Scene {
-        template: garment.positions,
-        triangles: garment.triangles,
+    let config = SceneConfig {
+        garment: "skirt".into(),
+        motion: motion.name.clone(),
         betas: betas.to_vec(),
-        motion,
-        blend: BlendIn {
-            blend_frames: 15,
-            settle_frames: 5,
-        },
-        material: Material::default(),
-        friction: 0.3,
-        params,
-        frames: None,
-        attachments,
-    }
+        blend_frames: 15,
+        settle_frames: 5,
+        solver: params,
+        ..SceneConfig::default()
+    };
+    let template = (garment.positions, garment.triangles);
+    Scene::new(config, template, attachments, motion, model).unwrap()
 }
 
 fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
@@ -52,7 +48,7 @@ fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {
         .run(&model, |frame| {
             let top = frame.garment[..params.columns]
                 .iter()
-                .map(|p| p.y)
+                .map(|p| p[1])
                 .fold(f64::INFINITY, f64::min);
             lowest_top = lowest_top.min(top - frame.pose.transl[1]);
             let pelvis = frame.body.joints[0][1];

@@ -2,40 +2,47 @@
 //! friction, zero density, bad solver counts, and a body mesh that does not close.
 
 use motions::library::MotionSpec;
-use motions::{BlendIn, BodyModel};
+use motions::{BodyModel, Motion};
 use sim::obstacles::AnimatedMesh;
 use sim::scene::Scene;
-use sim::{ClothMesh, Material, SolverParams, Vec3};
+use sim::{ClothMesh, SceneConfig, SolverParams, Vec3};
 
-fn scene(model: &BodyModel) -> Scene {
-    let shaped = model.shape(&[]).unwrap();
-    let grid = ClothMesh::grid(3, 0.1, 0.0).unwrap();
-    Scene {
-        template: grid
-            .rest()
-            .iter()
-            .map(|p| [p.x, p.y + 0.5, p.z + 0.5])
-            .collect(),
-        triangles: grid.triangles().to_vec(),
-        betas: vec![],
-        motion: MotionSpec::parse("walk:duration=0.2")
-            .unwrap()
-            .generate(model, &shaped)
-            .unwrap(),
-        blend: BlendIn {
-            blend_frames: 2,
-            settle_frames: 1,
-        },
-        material: Material::default(),
-        friction: 0.3,
-        params: SolverParams::default(),
+fn config() -> SceneConfig {
+    SceneConfig {
+        blend_frames: 2,
+        settle_frames: 1,
         frames: Some(2),
-        attachments: vec![],
+        solver: SolverParams::default(),
+        ..SceneConfig::default()
     }
 }
 
-fn error_of(s: &Scene, model: &BodyModel) -> String {
-    s.run(model, |_| Ok(()))
+fn motion(model: &BodyModel) -> Motion {
+    let shaped = model.shape(&[]).unwrap();
+    MotionSpec::parse("walk:duration=0.2")
+        .unwrap()
+        .generate(model, &shaped)
+        .unwrap()
+}
+
+fn scene(config: SceneConfig, motion: Motion, model: &BodyModel) -> sim::Result<Scene> {
+    let grid = ClothMesh::grid(3, 0.1, 0.0).unwrap();
+    let template = grid
+        .rest()
+        .iter()
+        .map(|p| [p.x, p.y + 0.5, p.z + 0.5])
+        .collect();
+    Scene::new(
+        config,
+        (template, grid.triangles().to_vec()),
+        vec![],
+        motion,
+        model,
+    )
+}
+
+fn error_of(config: SceneConfig, motion: Motion, model: &BodyModel) -> String {
+    scene(config, motion, model)
         .expect_err("the scene is rejected")
         .to_string()
 }
@@ -43,32 +50,36 @@ fn error_of(s: &Scene, model: &BodyModel) -> String {
 #[test]
 fn bad_settings_are_named() {
     let model = BodyModel::default_body();
-    let good = scene(&model);
+    let good = scene(config(), motion(&model), &model).unwrap();
     good.run(&model, |_| Ok(())).unwrap();
 
-    let mut s = good.clone();
-    s.motion.frames[1].pose[5] = f64::NAN;
+    let mut m = motion(&model);
+    m.frames[1].pose[5] = f64::NAN;
+    let message = error_of(config(), m, &model);
+    assert!(message.contains("frame 1 has a non-finite"), "{message}");
+
+    let mut c = config();
+    c.friction = -0.1;
+    let message = error_of(c, motion(&model), &model);
+    assert!(message.starts_with("friction = -0.1"), "{message}");
+
+    let mut c = config();
+    c.material.density = 0.0;
+    let message = error_of(c, motion(&model), &model);
     assert!(
-        error_of(&s, &model).contains("non-finite"),
-        "{}",
-        error_of(&s, &model)
+        message.starts_with("material.rho_kg_per_m2 = 0"),
+        "{message}"
     );
 
-    let mut s = good.clone();
-    s.friction = -0.1;
-    assert!(error_of(&s, &model).contains("friction"));
+    let mut c = config();
+    c.solver.substeps = 0;
+    let message = error_of(c, motion(&model), &model);
+    assert!(message.starts_with("solver.substeps = 0"), "{message}");
 
-    let mut s = good.clone();
-    s.material.density = 0.0;
-    assert!(error_of(&s, &model).contains("rho"));
-
-    let mut s = good.clone();
-    s.params.substeps = 0;
-    assert!(error_of(&s, &model).contains("substeps"));
-
-    let mut s = good;
-    s.betas = vec![f64::INFINITY];
-    assert!(error_of(&s, &model).contains("beta"));
+    let mut c = config();
+    c.betas = vec![f64::INFINITY];
+    let message = error_of(c, motion(&model), &model);
+    assert!(message.starts_with("betas[0] = inf"), "{message}");
 }
 
 #[test]

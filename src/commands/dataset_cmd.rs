@@ -8,8 +8,8 @@ use anyhow::{Context, Result, bail};
 use sim::dataset::{DatasetSpec, ManifestRecord, PlannedSequence, stats};
 use sim::recording::Recording;
 
-use super::synth::{DatasetDir, finished_record, read_jsonl, sha256_file, write_jsonl};
 use crate::cli::DatasetCommand;
+use crate::dataset_dir::{DatasetDir, finished_record, read_jsonl, sha256_file, write_jsonl};
 use crate::output::write_json;
 
 pub fn run(command: DatasetCommand) -> Result<()> {

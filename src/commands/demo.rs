@@ -4,21 +4,25 @@
 //! MCAP, every K-th frame as OBJ (garment and body), pictures (a contact sheet of six frames
 //! and a GIF of the whole sequence), the HTML viewer, and a JSON summary.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use render::View;
 use serde_json::json;
 
 use crate::cli::DemoArgs;
 use crate::output::write_json;
-
-use super::render::{RenderJob, render_recording, write_view};
-use super::simulate::{RecordOptions, prepare, record, summary_json};
+use crate::pictures::{RenderJob, render_recording, write_view};
+use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
 
 pub fn run(args: &DemoArgs) -> Result<()> {
-    std::fs::create_dir_all(&args.out)?;
-    let prepared = prepare(&args.scene)?;
-    let sequence = args.out.join("sequence.mcap");
-    let frames_dir = args.out.join("frames");
+    let config = resolve_config(&args.scene)?;
+    if print_config(&args.scene, &config)? {
+        return Ok(());
+    }
+    let out = args.out.as_deref().context("demo needs --out DIR")?;
+    let prepared = prepare(config)?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let sequence = out.join("sequence.mcap");
+    let frames_dir = out.join("frames");
     let obj = (args.obj_every > 0).then_some((frames_dir.as_path(), args.obj_every));
     let options = RecordOptions {
         obj,
@@ -33,9 +37,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         colour_by: None,
         gif: Some((2, 320)),
     };
-    let pictures = args.out.join("pictures");
+    let pictures = out.join("pictures");
     let rendered = render_recording(&sequence, &prepared.model, true, &job, &pictures)?;
-    let viewer = args.out.join("view.html");
+    let viewer = out.join("view.html");
     write_view(
         std::slice::from_ref(&sequence),
         &prepared.model,
@@ -49,10 +53,10 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     summary["viewer"] = json!(viewer);
     summary["garment"] = prepared.garment.name.clone().into();
     summary["motion"] = prepared.scene.motion.name.clone().into();
-    summary["blend_frames"] = prepared.scene.blend.blend_frames.into();
-    summary["settle_frames"] = prepared.scene.blend.settle_frames.into();
+    summary["blend_frames"] = prepared.scene.config.blend_frames.into();
+    summary["settle_frames"] = prepared.scene.config.settle_frames.into();
     summary["body_vertices"] = prepared.model.num_vertices().into();
-    write_json(&args.out.join("summary.json"), &summary)?;
+    write_json(&out.join("summary.json"), &summary)?;
     if let Some(path) = &args.json {
         write_json(path, &summary)?;
     }
@@ -63,8 +67,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         prepared.model.num_vertices(),
         prepared.scene.motion.name,
         s.frames,
-        prepared.scene.blend.blend_frames,
-        prepared.scene.blend.settle_frames
+        prepared.scene.config.blend_frames,
+        prepared.scene.config.settle_frames
     );
     println!(
         "  simulated at {:.1} frames/s; max penetration {:.1} mm, max edge stretch {:.3}; wrote {}, OBJ frames in {}, summary.json",

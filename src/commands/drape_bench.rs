@@ -27,7 +27,7 @@ pub fn run(args: &DrapeBenchArgs) -> Result<()> {
         "max_edge_stretch": m.max_edge_stretch, "p99_edge_stretch": m.p99_edge_stretch,
         "mean_edge_stretch": m.mean_edge_stretch, "drape_proxy": m.drape_proxy,
         "lowest_z_m": m.lowest_z_m,
-        "stages_s": sim::scene::StageSeconds::from(r.stages),
+        "stages_s": r.stages,
     });
     let npy = args.out.join(format!("final_n{}.npy", args.n));
     // Peers' frame: z up, (x, z_ours, y_ours).

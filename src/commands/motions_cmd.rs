@@ -1,16 +1,14 @@
 //! `dit-garment motions list|show|export`.
 
-use std::collections::BTreeMap;
-
 use anyhow::Result;
 use motions::library::{MOTIONS, MotionSpec};
 use motions::{BlendIn, JOINT_NAMES, Motion, NUM_JOINTS, canonical_a_pose};
 use serde_json::json;
+use sim::recording::{BodySequenceMeta, Channels, FrameRecord, SequenceWriter, UNITS};
 
 use crate::cli::MotionsCommand;
 use crate::inputs;
 use crate::output::{write_atomic, write_json};
-use crate::recording::write_body_sequence;
 
 pub fn run(command: MotionsCommand) -> Result<()> {
     match command {
@@ -42,12 +40,38 @@ pub fn run(command: MotionsCommand) -> Result<()> {
                 );
             }
             let posed = model.pose_batch(&shaped, &m.frames)?;
-            let extra = BTreeMap::from([
-                ("blend_frames".to_string(), blend_frames.to_string()),
-                ("settle_frames".to_string(), settle_frames.to_string()),
-            ]);
+            let meta = BodySequenceMeta {
+                software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
+                motion: m.name.clone(),
+                body_model: model.name().to_string(),
+                betas: shaped.betas.clone(),
+                fps: m.fps,
+                frames: m.len(),
+                blend_frames,
+                settle_frames,
+                units: UNITS.to_string(),
+            };
             write_atomic(&out, |w| {
-                write_body_sequence(w, &model, &shaped, &m, &posed, &extra)
+                let channels = Channels {
+                    body_faces: Some(model.faces()),
+                    joints: true,
+                    ..Channels::default()
+                };
+                let mut writer = SequenceWriter::new(w, &meta, channels, m.fps)?;
+                for (index, (frame, body)) in m.frames.iter().zip(&posed).enumerate() {
+                    writer.write_frame(&FrameRecord {
+                        index,
+                        garment: None,
+                        pose: &frame.pose,
+                        transl: frame.transl,
+                        betas: &shaped.betas,
+                        body_vertices: Some(&body.vertices),
+                        joints: Some(&body.joints),
+                        stats: None,
+                    })?;
+                }
+                writer.finish()?;
+                Ok(())
             })?;
             let bytes = std::fs::metadata(&out)?.len();
             println!(

@@ -1,9 +1,9 @@
 //! `dit-garment regress`: the physics regression suite as a table and JSON; exits non-zero if
-//! a scenario fails (known-open ones are marked and do not fail the run).
+//! a scenario fails.
 
 use anyhow::{Result, bail};
 use serde_json::json;
-use sim::regress::{KNOWN_OPEN, run as run_suite};
+use sim::regress::run as run_suite;
 
 use crate::cli::RegressArgs;
 use crate::output::write_json;
@@ -29,23 +29,15 @@ pub fn run(args: &RegressArgs) -> Result<()> {
     );
     let mut failed = 0;
     for o in &outcomes {
-        let known = KNOWN_OPEN.contains(&o.name.as_str());
-        let result = match (o.pass, known) {
-            (true, _) => "pass",
-            (false, true) => "open",
-            (false, false) => "FAIL",
-        };
-        failed += (!o.pass && !known) as usize;
+        let result = if o.pass { "pass" } else { "FAIL" };
+        failed += !o.pass as usize;
         println!(
             "{:<40} {:>12.6} {:>12.6} {:>11.3e}  {result:<6}  {}",
             o.name, o.expected, o.measured, o.tolerance, o.unit
         );
     }
     if let Some(path) = &args.json {
-        write_json(
-            path,
-            &json!({ "scenarios": outcomes, "known_open": KNOWN_OPEN, "long": args.long }),
-        )?;
+        write_json(path, &json!({ "scenarios": outcomes, "long": args.long }))?;
     }
     let passed = outcomes.iter().filter(|o| o.pass).count();
     println!("{passed} of {} scenarios pass", outcomes.len());

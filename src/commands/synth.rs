@@ -1,16 +1,14 @@
 //! `dit-garment synth`: a dataset from a TOML spec, sequences in parallel, resumable, sharded
 //! by Slurm job arrays or Kubernetes indexed jobs.
 //!
-//! Layout of a dataset folder: `spec.toml` (the spec), `plan.jsonl` (every planned sequence),
-//! `templates/<garment>.obj`, `sequences/<id>.mcap`, `records/<id>.json` (one manifest line
-//! per finished sequence, written after its recording) and `manifest.jsonl` (the records in
-//! plan order, written when every sequence has one). Every file is written to a temporary name
-//! and renamed, so a killed run leaves only whole files; a re-run skips sequences whose record
-//! exists and whose recording matches the record's checksum.
+//! The dataset folder's layout is in `crate::dataset_dir`. Every file is written to a
+//! temporary name and renamed, so a killed run leaves only whole files; a re-run skips
+//! sequences whose record exists and whose recording matches the record's checksum. Each
+//! sequence is a scene configuration built from the spec's per-sequence keys (the same key
+//! names, docs/DATASETS.md), recorded in the sequence's metadata.
 
 use std::collections::HashMap;
-use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -20,117 +18,22 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motions::BodyModel;
 use rayon::prelude::*;
 use serde_json::json;
-use sha2::{Digest, Sha256};
 use sim::dataset::{
     Attempt, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, expand_motions, plan,
 };
 use sim::scene::BodyAttachment;
+use sim::{SceneConfig, SolverParams};
 
-use super::simulate::{RecordOptions, TIMED_OUT, prepare_with, record};
-use crate::cli::{ModelArgs, SceneArgs, SynthArgs};
+use crate::cli::SynthArgs;
+use crate::dataset_dir::{DatasetDir, finished_record, sha256_file, write_jsonl};
 use crate::inputs;
 use crate::output::{write_atomic, write_json};
+use crate::run::{RecordOptions, is_deadline, prepare_with, record};
 
 /// The tiny example spec (4 sequences of 30 frames).
 pub const TINY_SPEC: &str = include_str!("../../specs/tiny.toml");
 /// The paper-like example spec on the built-in library.
 pub const PAPER_SPEC: &str = include_str!("../../specs/paper.toml");
-
-/// Paths inside a dataset folder.
-pub struct DatasetDir {
-    pub root: PathBuf,
-}
-
-impl DatasetDir {
-    pub fn new(root: &Path) -> Self {
-        Self {
-            root: root.to_path_buf(),
-        }
-    }
-    pub fn spec(&self) -> PathBuf {
-        self.root.join("spec.toml")
-    }
-    pub fn plan(&self) -> PathBuf {
-        self.root.join("plan.jsonl")
-    }
-    pub fn manifest(&self) -> PathBuf {
-        self.root.join("manifest.jsonl")
-    }
-    pub fn sequence_file(id: &str) -> String {
-        format!("sequences/{id}.mcap")
-    }
-    pub fn record(&self, id: &str) -> PathBuf {
-        self.root.join("records").join(format!("{id}.json"))
-    }
-    pub fn template(&self, garment: &str) -> PathBuf {
-        let name: String = Path::new(garment)
-            .file_stem()
-            .map_or(garment.into(), |s| s.to_string_lossy().into_owned());
-        self.root.join("templates").join(format!("{name}.obj"))
-    }
-}
-
-/// SHA-256 of a file, hex.
-pub fn sha256_file(path: &Path) -> Result<(String, u64)> {
-    let mut file =
-        std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let mut hasher = Sha256::new();
-    let mut buffer = vec![0u8; 1 << 20];
-    let mut bytes = 0u64;
-    loop {
-        let n = file.read(&mut buffer)?;
-        if n == 0 {
-            break;
-        }
-        hasher.update(&buffer[..n]);
-        bytes += n as u64;
-    }
-    let hex = hasher
-        .finalize()
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
-    Ok((hex, bytes))
-}
-
-/// Reads a JSON Lines file of `T`, naming the file and line of a bad one.
-pub fn read_jsonl<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    text.lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(i, l)| {
-            serde_json::from_str(l)
-                .with_context(|| format!("{} line {}: not a valid entry", path.display(), i + 1))
-        })
-        .collect()
-}
-
-/// Writes values as JSON Lines, atomically.
-pub fn write_jsonl<T: serde::Serialize>(path: &Path, values: &[T]) -> Result<()> {
-    write_atomic(path, |w| {
-        for v in values {
-            serde_json::to_writer(&mut *w, v)?;
-            writeln!(w)?;
-        }
-        Ok(())
-    })
-}
-
-/// A finished sequence's record, if it is complete: the record parses and its recording (if
-/// any) matches the checksum.
-pub fn finished_record(dir: &DatasetDir, id: &str) -> Option<ManifestRecord> {
-    let text = std::fs::read_to_string(dir.record(id)).ok()?;
-    let record: ManifestRecord = serde_json::from_str(&text).ok()?;
-    if let (Some(file), Some(sha)) = (&record.file, &record.sha256) {
-        let (actual, _) = sha256_file(&dir.root.join(file)).ok()?;
-        if &actual != sha {
-            return None;
-        }
-    }
-    Some(record)
-}
 
 /// This task's shard (K, N): `--shard K/N`, else a Slurm job array, else a Kubernetes indexed
 /// job (with `--shard-count`), else the whole dataset.
@@ -205,6 +108,8 @@ struct RunContext<'a> {
     spec: &'a DatasetSpec,
     dir: &'a DatasetDir,
     model: Arc<BodyModel>,
+    /// The `--model` file, recorded in every sequence's configuration.
+    model_file: Option<String>,
     templates: HashMap<String, (Arc<garments::Garment>, Vec<BodyAttachment>)>,
     software: String,
 }
@@ -215,73 +120,64 @@ fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
     let (garment, attachments) = &ctx.templates[&p.garment];
     let file = DatasetDir::sequence_file(&p.id);
     let path = ctx.dir.root.join(&file);
-    let material = sim::Material {
-        stretch: p.material.k_s_n_per_m,
-        density: p.material.rho_kg_per_m2,
-        bending: p.material.k_b_n_m,
-    };
-    let settings =
-        std::iter::once((spec.solver.substeps, spec.solver.iterations)).chain(std::iter::repeat_n(
+    let settings = std::iter::once((spec.solver.substeps, spec.solver.max_iterations)).chain(
+        std::iter::repeat_n(
             (spec.gates.retry_substeps, spec.gates.retry_iterations),
             spec.gates.retries,
-        ));
+        ),
+    );
     let mut attempts = Vec::new();
     let mut frames = 0;
     let started = Instant::now();
     for (substeps, iterations) in settings {
         // The recording always belongs to the last attempt that finished.
         let _ = std::fs::remove_file(&path);
-        let args = SceneArgs {
+        let config = SceneConfig {
             garment: p.garment.clone(),
             motion: p.motion.clone(),
-            model: ModelArgs { model: None },
+            model: ctx.model_file.clone(),
             betas: p.betas.clone(),
-            material: String::new(),
             friction: p.friction,
             frames: spec.sequence.frames,
             blend_frames: spec.sequence.blend_frames,
             settle_frames: spec.sequence.settle_frames,
-            substeps,
-            iterations,
-            no_self_contact: !spec.solver.self_contact,
-            self_contact_distance: spec.solver.self_contact_distance,
-            self_friction: spec.solver.self_friction,
+            seed: Some(p.seed),
+            material: p.material,
+            solver: SolverParams {
+                substeps,
+                max_iterations: iterations,
+                self_contact: spec.solver.self_contact,
+                self_contact_distance: spec.solver.self_contact_distance,
+                self_friction: spec.solver.self_friction,
+                ..SolverParams::default()
+            },
+            record: sim::config::RecordConfig::default(),
         };
+        let solver = config.solver;
         let attempt_started = Instant::now();
         let prepared = prepare_with(
             ctx.model.clone(),
             garment.clone(),
             attachments.clone(),
-            material,
-            &args,
+            config,
         );
-        let (gates, solver) = match prepared {
-            Err(e) => (
-                GateResult::unfinished(format!("could not set up: {e:#}"), false),
-                sim::SolverParams::default(),
-            ),
+        let gates = match prepared {
+            Err(e) => GateResult::unfinished(format!("could not set up: {e:#}"), false),
             Ok(prepared) => {
                 frames = prepared.scene.num_frames();
                 let options = RecordOptions {
                     quiet: true,
-                    seed: Some(p.seed),
                     deadline: Some(attempt_started + Duration::from_secs_f64(spec.gates.timeout_s)),
                     ..RecordOptions::default()
                 };
-                let gates = match record(&prepared, &path, options) {
+                match record(&prepared, &path, options) {
                     Ok(summary) => GateResult::judge(&summary, &spec.gates),
-                    Err(e) => {
-                        let message = format!("{e:#}");
-                        let timed_out = message.contains(TIMED_OUT);
-                        let reason = if timed_out {
-                            format!("time-out after {} s", spec.gates.timeout_s)
-                        } else {
-                            format!("solver: {message}")
-                        };
-                        GateResult::unfinished(reason, timed_out)
-                    }
-                };
-                (gates, prepared.scene.params)
+                    Err(e) if is_deadline(&e) => GateResult::unfinished(
+                        format!("time-out after {} s", spec.gates.timeout_s),
+                        true,
+                    ),
+                    Err(e) => GateResult::unfinished(format!("solver: {e:#}"), false),
+                }
             }
         };
         let passed = gates.passed;
@@ -451,6 +347,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         spec: &spec,
         dir: &dir,
         model,
+        model_file: args.model.model.as_ref().map(|m| m.display().to_string()),
         templates,
         software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
     };

@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 use super::plan::SPLITS;
 use super::spec::GateSpec;
 use crate::SolverParams;
-use crate::recording::MaterialRecord;
+use crate::params::Material;
 use crate::scene::RunSummary;
 
 /// Gate results of one attempt.
@@ -119,7 +119,7 @@ pub struct ManifestRecord {
     /// Shape coefficients.
     pub betas: Vec<f64>,
     /// Material, units in the keys.
-    pub material: MaterialRecord,
+    pub material: Material,
     /// Friction coefficient.
     pub friction: f64,
     /// The sequence's seed.
@@ -217,9 +217,9 @@ pub fn stats(records: &[ManifestRecord], fps: f64) -> Value {
         "motions": motions,
         "failures": reasons,
         "material_histograms": {
-            "k_s_n_per_m": histogram(records.iter().map(|r| r.material.k_s_n_per_m).collect(), false),
-            "rho_kg_per_m2": histogram(records.iter().map(|r| r.material.rho_kg_per_m2).collect(), false),
-            "k_b_n_m": histogram(records.iter().map(|r| r.material.k_b_n_m).collect(), true),
+            "k_s_n_per_m": histogram(records.iter().map(|r| r.material.stretch).collect(), false),
+            "rho_kg_per_m2": histogram(records.iter().map(|r| r.material.density).collect(), false),
+            "k_b_n_m": histogram(records.iter().map(|r| r.material.bending).collect(), true),
         },
         "simulation_wall_s": wall,
         "simulated_frames_per_s": if wall > 0.0 { frames as f64 / wall } else { 0.0 },

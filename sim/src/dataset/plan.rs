@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::spec::{DatasetSpec, MaterialRanges, Tag};
-use crate::recording::MaterialRecord;
+use crate::params::Material;
 use crate::{Error, Result};
 
 /// One sequence to simulate.
@@ -29,7 +29,7 @@ pub struct PlannedSequence {
     /// Shape coefficients.
     pub betas: Vec<f64>,
     /// Material.
-    pub material: MaterialRecord,
+    pub material: Material,
     /// Friction coefficient.
     pub friction: f64,
     /// The sequence's seed.
@@ -64,11 +64,11 @@ fn uniform(rng: &mut ChaCha8Rng, r: [f64; 2]) -> f64 {
     }
 }
 
-fn material(rng: &mut ChaCha8Rng, m: &MaterialRanges) -> MaterialRecord {
-    MaterialRecord {
-        k_s_n_per_m: uniform(rng, m.k_s),
-        rho_kg_per_m2: uniform(rng, m.rho),
-        k_b_n_m: 10f64.powf(uniform(rng, m.log10_k_b)),
+fn material(rng: &mut ChaCha8Rng, m: &MaterialRanges) -> Material {
+    Material {
+        stretch: uniform(rng, m.k_s),
+        density: uniform(rng, m.rho),
+        bending: 10f64.powf(uniform(rng, m.log10_k_b)),
     }
 }
 
@@ -316,8 +316,8 @@ mod tests {
                 "test_shape" => assert!(p.betas.iter().all(|b| *b >= 1.5)),
                 _ => {}
             }
-            assert!((40.0..=200.0).contains(&p.material.k_s_n_per_m));
-            assert!((1e-8..=1e-4).contains(&p.material.k_b_n_m));
+            assert!((40.0..=200.0).contains(&p.material.stretch));
+            assert!((1e-8..=1e-4).contains(&p.material.bending));
             assert_eq!(p.betas.len(), 10);
         }
         // Draws of one shape share the betas; another seed changes everything.

@@ -106,14 +106,17 @@ impl Default for MaterialRanges {
     }
 }
 
-/// Solver settings.
+/// Solver settings of every sequence: the keys of a scene configuration's `[solver]` table
+/// (docs/DATASETS.md has the mapping).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSpec {
     /// Substeps per 30 fps frame.
     pub substeps: usize,
-    /// Maximum iterations per substep.
-    pub iterations: usize,
+    /// Maximum iterations per substep (`iterations` in specs written before the scene
+    /// configuration).
+    #[serde(alias = "iterations")]
+    pub max_iterations: usize,
     /// Cloth-cloth contact.
     pub self_contact: bool,
     /// Gap self-contact keeps between layers, m.
@@ -127,7 +130,7 @@ impl Default for SolverSpec {
         let plain = crate::SolverParams::default();
         Self {
             substeps: 4,
-            iterations: 16,
+            max_iterations: 16,
             self_contact: true,
             self_contact_distance: plain.self_contact_distance,
             self_friction: plain.self_friction,
@@ -297,7 +300,7 @@ impl DatasetSpec {
         let g = &self.gates;
         for (key, n) in [
             ("solver.substeps", v.substeps),
-            ("solver.iterations", v.iterations),
+            ("solver.max_iterations", v.max_iterations),
             ("gates.retry_substeps", g.retry_substeps),
             ("gates.retry_iterations", g.retry_iterations),
         ] {

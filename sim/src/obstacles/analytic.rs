@@ -57,12 +57,6 @@ impl Plane {
 }
 
 impl Obstacle for Plane {
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
-    fn name(&self) -> &str {
-        "plane"
-    }
     fn friction(&self) -> f64 {
         self.friction
     }
@@ -107,12 +101,6 @@ impl Sphere {
 }
 
 impl Obstacle for Sphere {
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
-    fn name(&self) -> &str {
-        "sphere"
-    }
     fn friction(&self) -> f64 {
         self.friction
     }
@@ -166,12 +154,6 @@ impl Cuboid {
 }
 
 impl Obstacle for Cuboid {
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
-    fn name(&self) -> &str {
-        "box"
-    }
     fn friction(&self) -> f64 {
         self.friction
     }

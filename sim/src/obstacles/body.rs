@@ -78,8 +78,8 @@ impl AnimatedMesh {
     pub fn set_keyframes(&mut self, start: &[Vec3], end: &[Vec3], t0: f64, t1: f64) -> Result<()> {
         let n = self.surface.num_vertices();
         if start.len() != n || end.len() != n {
-            return Err(Error::Obstacle(format!(
-                "body keyframes have {} and {} vertices, the body has {n}",
+            return Err(body_error(format!(
+                "keyframes have {} and {} vertices, the body has {n}",
                 start.len(),
                 end.len()
             )));
@@ -89,13 +89,13 @@ impl AnimatedMesh {
             .chain(end)
             .position(|p| !p.iter().all(|c| c.is_finite()))
         {
-            return Err(Error::Obstacle(format!(
-                "body keyframe vertex {} is not finite",
+            return Err(body_error(format!(
+                "keyframe vertex {} is not finite",
                 i % n
             )));
         }
         if t1 <= t0 {
-            return Err(Error::Obstacle(format!("keyframe times {t0} >= {t1}")));
+            return Err(body_error(format!("keyframe times {t0} >= {t1}")));
         }
         self.start.copy_from_slice(start);
         self.end.copy_from_slice(end);
@@ -152,13 +152,6 @@ impl AnimatedMesh {
 }
 
 impl Obstacle for AnimatedMesh {
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
-    fn name(&self) -> &str {
-        "body"
-    }
-
     fn friction(&self) -> f64 {
         self.friction
     }
@@ -241,9 +234,17 @@ impl Obstacle for AnimatedMesh {
     }
 }
 
+fn body_error(problem: String) -> Error {
+    Error::Obstacle {
+        obstacle: "body".into(),
+        problem,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::obstacles::Obstacles;
     use crate::obstacles::trimesh::tests::cube;
     use crate::{ClothMesh, ClothSetup, ClothState, Material, Solver, SolverParams};
 
@@ -273,16 +274,13 @@ mod tests {
         };
         let mut body = AnimatedMesh::new(&block(0.0), &faces, 0.3).unwrap();
         body.interpolate_substeps = interpolate_substeps;
-        let mut obstacles: Vec<Box<dyn Obstacle>> = vec![Box::new(body)];
+        let mut obstacles = Obstacles::body(body);
         let mut state = ClothState::at_rest(mesh.rest().to_vec());
         for k in 0..10 {
             let (from, to) = if k == 0 { (0.0, 0.06) } else { (0.06, 0.06) };
             let t0 = k as f64 * frame;
-            obstacles[0]
-                .as_any_mut()
-                .downcast_mut::<AnimatedMesh>()
-                .unwrap()
-                .set_keyframes(&block(from), &block(to), t0, t0 + frame)
+            let body = obstacles.body.as_mut().unwrap();
+            body.set_keyframes(&block(from), &block(to), t0, t0 + frame)
                 .unwrap();
             solver
                 .advance_frame(&mut state, &mut obstacles, t0, k)

@@ -60,11 +60,7 @@ pub struct SurfacePoint {
 }
 
 /// Something cloth collides with.
-pub trait Obstacle: Send + Sync + std::any::Any {
-    /// Downcasting access (the scene updates its body's keyframes through it).
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
-    /// Short name for statistics and errors.
-    fn name(&self) -> &str;
+pub trait Obstacle: Send + Sync {
     /// Coulomb friction coefficient against cloth.
     fn friction(&self) -> f64;
     /// Moves the obstacle to its pose at `time` (s), the end of the coming step.
@@ -75,6 +71,56 @@ pub trait Obstacle: Send + Sync + std::any::Any {
     /// Appends the contacts of the step's cloth vertices to `out`, in vertex order.
     fn detect(&mut self, input: &DetectionInput, out: &mut Vec<Contact>) {
         detect_each(self, input, out);
+    }
+}
+
+/// What a cloth collides with: the animated body, props (analytic shapes, static or kinematic
+/// meshes) and the ground. Detection visits them in that order (body, props, ground), and a
+/// vertex touching several is solved against them in that order.
+#[derive(Default)]
+pub struct Obstacles {
+    /// The animated body.
+    pub body: Option<AnimatedMesh>,
+    /// Props, in detection order.
+    pub props: Vec<Box<dyn Obstacle>>,
+    /// The ground plane.
+    pub ground: Option<Plane>,
+}
+
+impl Obstacles {
+    /// The body alone.
+    pub fn body(body: AnimatedMesh) -> Self {
+        Self {
+            body: Some(body),
+            ..Self::default()
+        }
+    }
+
+    /// The ground alone.
+    pub fn ground(ground: Plane) -> Self {
+        Self {
+            ground: Some(ground),
+            ..Self::default()
+        }
+    }
+
+    /// These props alone, in detection order.
+    pub fn props(props: Vec<Box<dyn Obstacle>>) -> Self {
+        Self {
+            props,
+            ..Self::default()
+        }
+    }
+
+    /// Every obstacle, in detection order.
+    pub fn each_mut(&mut self) -> impl Iterator<Item = &mut dyn Obstacle> {
+        let body = self.body.iter_mut().map(|b| b as &mut dyn Obstacle);
+        let props = self
+            .props
+            .iter_mut()
+            .map(|p| p.as_mut() as &mut dyn Obstacle);
+        let ground = self.ground.iter_mut().map(|g| g as &mut dyn Obstacle);
+        body.chain(props).chain(ground)
     }
 }
 

@@ -25,25 +25,27 @@ pub(crate) struct MeshSurface {
 
 impl MeshSurface {
     pub fn new(name: &str, vertices: &[Vec3], faces: &[[u32; 3]]) -> Result<Self> {
+        let fail = |problem: String| Error::Obstacle {
+            obstacle: name.to_string(),
+            problem,
+        };
         if let Some(i) = vertices
             .iter()
             .position(|p| !p.iter().all(|c| c.is_finite()))
         {
-            return Err(Error::Obstacle(format!("{name}: vertex {i} is not finite")));
+            return Err(fail(format!("vertex {i} is not finite")));
         }
         if faces
             .iter()
             .flatten()
             .any(|&v| v as usize >= vertices.len())
         {
-            return Err(Error::Obstacle(format!(
-                "{name}: a face refers to a missing vertex"
-            )));
+            return Err(fail("a face refers to a missing vertex".into()));
         }
         let open = motions::boundary_edges(faces);
         if open > 0 {
-            return Err(Error::Obstacle(format!(
-                "{name}: the mesh is not closed ({open} boundary edges); the inside test needs a closed, consistently oriented surface"
+            return Err(fail(format!(
+                "the mesh is not closed ({open} boundary edges); the inside test needs a closed, consistently oriented surface"
             )));
         }
         let mesh = TriMesh::with_flags(
@@ -51,7 +53,7 @@ impl MeshSurface {
             faces.to_vec(),
             TriMeshFlags::ORIENTED | TriMeshFlags::DEFORMABLE,
         )
-        .map_err(|e| Error::Obstacle(format!("{name}: {e:?}")))?;
+        .map_err(|e| fail(format!("{e:?}")))?;
         Ok(Self {
             mesh,
             faces: faces.to_vec(),
@@ -134,12 +136,6 @@ impl StaticMesh {
 }
 
 impl Obstacle for StaticMesh {
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
-    fn name(&self) -> &str {
-        "mesh"
-    }
     fn friction(&self) -> f64 {
         self.friction
     }

@@ -7,7 +7,7 @@
 use super::{G, Outcome};
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::error::Result;
-use crate::obstacles::{Obstacle, Plane};
+use crate::obstacles::{Obstacles, Plane};
 use crate::params::{Material, SolverParams};
 use crate::self_intersection::count_self_intersections;
 use crate::solver::{ClothSetup, Solver};
@@ -114,7 +114,7 @@ pub fn two_sheets(self_contact: bool) -> Result<(f64, usize)> {
         FRAME,
     )?;
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
-    let mut ground: Vec<Box<dyn Obstacle>> = vec![Box::new(Plane::ground(0.0, 0.3))];
+    let mut ground = Obstacles::ground(Plane::ground(0.0, 0.3));
     let mut crossings = 0;
     for k in 0..30 {
         solver.advance_frame(&mut state, &mut ground, k as f64 * FRAME, k)?;
@@ -194,7 +194,7 @@ pub fn folded_strip(self_contact: bool) -> Result<(f64, usize)> {
             v.y = -1.0;
         }
     }
-    let mut ground: Vec<Box<dyn Obstacle>> = vec![Box::new(Plane::ground(0.0, 0.3))];
+    let mut ground = Obstacles::ground(Plane::ground(0.0, 0.3));
     let (mut crossings, mut gap) = (0, f64::INFINITY);
     for k in 0..45 {
         solver.advance_frame(&mut state, &mut ground, k as f64 * FRAME, k)?;
@@ -251,14 +251,15 @@ pub fn patch_on_tilted_sheet(theta: f64, mu: f64) -> Result<f64> {
     let mut state = ClothState::at_rest(mesh.rest().to_vec());
     let start: Vec3 = state.positions[split..].iter().sum::<Vec3>() / 9.0;
     for k in 0..30 {
-        solver.advance_frame(&mut state, &mut [], k as f64 * FRAME, k)?;
+        solver.advance_frame(&mut state, &mut Obstacles::default(), k as f64 * FRAME, k)?;
     }
     let end: Vec3 = state.positions[split..].iter().sum::<Vec3>() / 9.0;
     let height = (end - start).dot(&normal);
     if height.abs() > 1e-3 {
-        return Err(crate::error::Error::Setting(format!(
-            "the patch left the tilted sheet ({height} m along its normal)"
-        )));
+        return Err(crate::error::Error::Scenario {
+            scenario: "self_contact",
+            problem: format!("the patch left the tilted sheet ({height} m along its normal)"),
+        });
     }
     Ok((end - start).dot(&downhill))
 }

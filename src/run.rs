@@ -1,0 +1,250 @@
+//! A garment run as the commands share it: the scene configuration resolved from its layers
+//! (defaults, `--config` or `--config-from`, then flags), what it names loaded into a
+//! [`Scene`], and the run recorded as MCAP (atomically, with optional OBJ frames, a progress
+//! bar and a deadline).
+
+use std::io::Write;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use motions::BodyModel;
+use serde_json::json;
+use sim::SceneConfig;
+use sim::recording::{Channels, Recording, SequenceWriter, TemplateArrays};
+use sim::scene::{BodyAttachment, FPS, FrameOutput, RunSummary, Scene};
+
+use crate::cli::SceneArgs;
+use crate::inputs;
+use crate::output::write_atomic;
+
+/// The configuration the flags ask for: the defaults, or a `--config` file, or the
+/// configuration a `--config-from` recording carries, with every given flag over it. Not
+/// validated here: [`Scene::new`] validates it once (and `--print-config` before printing).
+pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
+    let mut c = if let Some(path) = &args.config {
+        SceneConfig::load(path)?
+    } else if let Some(path) = &args.config_from {
+        config_of_recording(path)?
+    } else {
+        SceneConfig::default()
+    };
+    if let Some(v) = &args.garment {
+        c.garment = v.clone();
+    }
+    if let Some(v) = &args.motion {
+        c.motion = v.clone();
+    }
+    if let Some(v) = &args.model.model {
+        c.model = Some(v.display().to_string());
+    }
+    if let Some(v) = &args.betas {
+        c.betas = v.clone();
+    }
+    if let Some(v) = &args.material {
+        c.material = c.material.with_overrides(v)?;
+    }
+    if let Some(v) = args.friction {
+        c.friction = v;
+    }
+    if let Some(v) = args.frames {
+        c.frames = Some(v);
+    }
+    if let Some(v) = args.blend_frames {
+        c.blend_frames = v;
+    }
+    if let Some(v) = args.settle_frames {
+        c.settle_frames = v;
+    }
+    if let Some(v) = args.substeps {
+        c.solver.substeps = v;
+    }
+    if let Some(v) = args.iterations {
+        c.solver.max_iterations = v;
+    }
+    if args.no_self_contact {
+        c.solver.self_contact = false;
+    }
+    if let Some(v) = args.self_contact_distance {
+        c.solver.self_contact_distance = v;
+    }
+    if let Some(v) = args.self_friction {
+        c.solver.self_friction = v;
+    }
+    Ok(c)
+}
+
+/// The configuration a recording was simulated from.
+pub fn config_of_recording(path: &Path) -> Result<SceneConfig> {
+    let recording = Recording::read(path)?;
+    let meta = recording
+        .meta
+        .with_context(|| format!("{}: the recording has no metadata", path.display()))?;
+    match meta.config {
+        Some(config) => Ok(config),
+        None => bail!(
+            "{}: the recording carries no scene configuration (made by an older version, or a \
+             predicted sequence); pass the scene's flags or a --config file instead",
+            path.display()
+        ),
+    }
+}
+
+/// With `--print-config`: validates the configuration and prints it as TOML; returns whether
+/// it did (the command then stops).
+pub fn print_config(args: &SceneArgs, config: &SceneConfig) -> Result<bool> {
+    if !args.print_config {
+        return Ok(false);
+    }
+    config.validate()?;
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(config.to_toml().as_bytes())?;
+    stdout.flush()?;
+    Ok(true)
+}
+
+/// A scene with its model and template (shared between the sequences of a dataset run).
+pub struct Prepared {
+    pub model: Arc<BodyModel>,
+    pub garment: Arc<garments::Garment>,
+    pub scene: Scene,
+}
+
+/// Loads what the configuration names (body model, garment, motion) and builds its scene.
+pub fn prepare(config: SceneConfig) -> Result<Prepared> {
+    let model = Arc::new(inputs::body_model(config.model.as_deref().map(Path::new))?);
+    let (garment, attachments) = inputs::garment(&config.garment, &model)?;
+    prepare_with(model, Arc::new(garment), attachments, config)
+}
+
+/// A scene on a loaded model and template; the configuration gives the motion, shape and
+/// settings (its garment and model keys name what was loaded).
+pub fn prepare_with(
+    model: Arc<BodyModel>,
+    garment: Arc<garments::Garment>,
+    attachments: Vec<BodyAttachment>,
+    config: SceneConfig,
+) -> Result<Prepared> {
+    let shaped = model.shape(&config.betas)?;
+    let motion = inputs::motion(&config.motion, &model, &shaped)?;
+    let template = (garment.positions.clone(), garment.triangles.clone());
+    let scene = Scene::new(config, template, attachments, motion, &model)?;
+    Ok(Prepared {
+        model,
+        garment,
+        scene,
+    })
+}
+
+/// How a run shows itself and what it writes besides the recording.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RecordOptions<'a> {
+    /// Write OBJ frames into this folder, every K-th frame.
+    pub obj: Option<(&'a Path, usize)>,
+    /// Hide the progress bar.
+    pub quiet: bool,
+    /// Stop with [`sim::Error::Deadline`] when the run is still going at this moment.
+    pub deadline: Option<Instant>,
+}
+
+/// Whether an error is a run stopped by its deadline.
+pub fn is_deadline(error: &anyhow::Error) -> bool {
+    error.chain().any(|e| {
+        matches!(
+            e.downcast_ref::<sim::Error>(),
+            Some(sim::Error::Deadline { .. })
+        )
+    })
+}
+
+/// Runs a prepared scene into `out` (atomically).
+pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSummary> {
+    let frames = p.scene.num_frames();
+    let software = format!("dit-garment {}", env!("CARGO_PKG_VERSION"));
+    let meta = p
+        .scene
+        .sequence_meta(&p.garment.name, p.model.name(), &software);
+    let template = TemplateArrays {
+        positions: p.garment.positions.clone(),
+        triangles: p.garment.triangles.clone(),
+        uvs: p.garment.uvs.clone(),
+        uv_triangles: p.garment.uv_triangles.clone(),
+    };
+    let recorded = p.scene.config.record;
+    let bar = ProgressBar::new(frames as u64).with_style(
+        ProgressStyle::with_template(
+            "simulating [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
+        )?
+        .progress_chars("=> "),
+    );
+    if options.quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let mut summary = None;
+    write_atomic(out, |w| {
+        let channels = Channels {
+            template: Some(&template),
+            body_faces: recorded.body_vertices.then(|| p.model.faces()),
+            joints: false,
+            stats: true,
+        };
+        let mut rec = SequenceWriter::new(w, &meta, channels, FPS)?;
+        if recorded.foxglove {
+            rec = rec.with_foxglove_scene(&template.triangles, Some(p.model.faces()))?;
+        }
+        let s = p.scene.run(&p.model, |frame| {
+            if options.deadline.is_some_and(|d| Instant::now() > d) {
+                return Err(sim::Error::Deadline { frame: frame.index });
+            }
+            rec.write_frame(&frame.record())?;
+            if let Some((dir, every)) = options.obj
+                && frame.index % every.max(1) == 0
+            {
+                write_frame_objs(dir, p, frame).map_err(|e| sim::Error::Recording {
+                    path: dir.display().to_string(),
+                    message: format!("{e:#}"),
+                })?;
+            }
+            bar.inc(1);
+            Ok(())
+        })?;
+        rec.finish()?;
+        summary = Some(s);
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    summary.context("the run produced no summary")
+}
+
+fn write_frame_objs(dir: &Path, p: &Prepared, frame: &FrameOutput) -> Result<()> {
+    let k = frame.index;
+    write_atomic(&dir.join(format!("garment_{k:04}.obj")), |w| {
+        garments::write_obj(w, &p.garment, Some(frame.garment))?;
+        Ok(())
+    })?;
+    write_atomic(&dir.join(format!("body_{k:04}.obj")), |w| {
+        writeln!(w, "# body frame {k}")?;
+        for v in &frame.body.vertices {
+            writeln!(w, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
+        }
+        for f in p.model.faces() {
+            writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
+        }
+        Ok(())
+    })
+}
+
+/// The machine-readable summary (keys checked by scripts).
+pub fn summary_json(s: &RunSummary, out: &Path) -> serde_json::Value {
+    json!({
+        "frames": s.frames, "finite": s.finite, "wall_s": s.wall_s, "frames_per_s": s.frames_per_s,
+        "max_penetration_m": s.max_penetration_m, "max_verts_inside": s.max_verts_inside,
+        "max_edge_stretch": s.max_edge_stretch, "max_self_intersections": s.max_self_intersections,
+        "vertices": s.vertices,
+        "mean_iterations": s.mean_iterations, "deep_contacts": s.deep_contacts,
+        "retried_frames": s.retried_frames, "stages_s": s.stages, "posing_s": s.posing_s,
+        "recording": out,
+    })
+}
