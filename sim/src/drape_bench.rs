@@ -61,8 +61,9 @@ impl DrapeBench {
         }
     }
 
-    /// Runs the 2 s scene.
+    /// Runs the 2 s scene (its solver settings are validated first, naming a bad one).
     pub fn run(&self) -> Result<DrapeResult> {
+        self.params.validate()?;
         let n = self.n;
         let mesh = ClothMesh::grid(n, 1.0, CLOTH_HEIGHT)?;
         let setup_started = Instant::now();

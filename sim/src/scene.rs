@@ -181,7 +181,9 @@ pub struct FrameStats {
     pub self_intersections: usize,
     /// Kinetic energy, J.
     pub kinetic_energy_j: f64,
-    /// Wall time of the frame, s.
+    /// Wall time of the frame, s. Not recorded: a recording holds only what the inputs
+    /// determine, so simulating its configuration again gives the same bytes.
+    #[serde(default, skip_serializing)]
     pub wall_s: f64,
 }
 

@@ -1,5 +1,8 @@
 //! Analytic obstacles: a plane, a sphere and an oriented box, each optionally moving with a
-//! constant acceleration (a kinematic prop such as an accelerating plate).
+//! constant acceleration (a kinematic prop such as an accelerating plate). The regression
+//! suite and the drape bench use the plane (ground, incline, accelerating plate) and the
+//! sphere; the box is for library users' scenes (a table, a bench) in `Obstacles::props`,
+//! checked by its tests here.
 
 use nalgebra::Rotation3;
 
@@ -24,7 +27,8 @@ impl Kinematic {
     }
 }
 
-/// An infinite plane (the ground, an incline).
+/// An infinite plane (the ground of every scene; the regression suite's incline and
+/// accelerating plate).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plane {
     /// A point on the plane at t = 0, m.
@@ -73,7 +77,7 @@ impl Obstacle for Plane {
     }
 }
 
-/// A sphere.
+/// A sphere (the drape bench's and the regression suite's obstacle).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sphere {
     /// Centre at t = 0, m.
@@ -123,7 +127,7 @@ impl Obstacle for Sphere {
     }
 }
 
-/// An oriented box.
+/// An oriented box: a prop for library users' scenes (no command or scenario uses it yet).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cuboid {
     /// Centre at t = 0, m.

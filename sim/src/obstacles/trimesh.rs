@@ -119,7 +119,8 @@ impl MeshSurface {
     }
 }
 
-/// A static closed mesh prop (a chair, a box from a file).
+/// A static closed mesh prop (a chair, a box from a file): for library users' scenes in
+/// `Obstacles::props` (no command or scenario uses it yet); its tests are here.
 pub struct StaticMesh {
     surface: MeshSurface,
     friction: f64,

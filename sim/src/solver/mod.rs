@@ -127,28 +127,6 @@ impl StageTimes {
             Stage::Factorize => &mut self.factorize,
         }
     }
-
-    /// Every stage with its time, in step order.
-    pub fn stages(&self) -> [(&'static str, f64); 11] {
-        [
-            ("predict", self.predict),
-            ("detect", self.detect),
-            ("damp", self.damp),
-            ("prepare", self.prepare),
-            ("local", self.local),
-            ("contact", self.contact),
-            ("self_contact", self.self_contact),
-            ("solve", self.solve),
-            ("residual", self.residual),
-            ("finish", self.finish),
-            ("factorize", self.factorize),
-        ]
-    }
-
-    /// The time of every stage together, s.
-    pub fn total(&self) -> f64 {
-        self.stages().iter().map(|(_, t)| t).sum()
-    }
 }
 
 /// What one step did.
