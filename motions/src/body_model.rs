@@ -321,6 +321,12 @@ impl BodyModel {
         &self.v_template
     }
 
+    /// Skinning weights of vertex `v`: (joint, weight) pairs, the non-zeros of its row, which
+    /// sum to 1 (garment skinning borrows them from the nearest body vertex).
+    pub fn skinning_weights(&self, v: usize) -> &[(u8, f64)] {
+        &self.skin[self.skin_start[v] as usize..self.skin_start[v + 1] as usize]
+    }
+
     /// Joint parents.
     pub fn parents(&self) -> &[Option<usize>; NUM_JOINTS] {
         &self.parents

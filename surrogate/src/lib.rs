@@ -1,5 +1,14 @@
-//! The learned surrogate, DiT-Garment (not yet implemented; see the surrogate issues).
+//! The learned surrogate, DiT-Garment: UV geometry images of garment templates (atlas,
+//! encode, chart-aware readback and its transpose), the canonical frame, the two training
+//! targets (`displacement` and `lbs_residual`), the condition vector, and the training
+//! tensors a dataset becomes. The diffusion transformer, its training and sampling build on
+//! these (later issues).
 //!
-//! This crate will hold UV geometry images (rasterize and read back), the 2D diffusion
-//! transformer with linear attention over 64x64 UV maps, rectified-flow training, iterative
-//! sampling with intersection guidance, and safetensors checkpoints.
+//! Depends on `sim` for recordings and materials as plain data, never on the scene runner.
+#![warn(missing_docs)]
+
+pub mod data;
+mod error;
+pub mod geometry;
+
+pub use error::{Error, Result};

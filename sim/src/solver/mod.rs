@@ -24,6 +24,7 @@ mod step;
 pub use setup::ClothSetup;
 
 use std::collections::BTreeMap;
+use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
@@ -221,6 +222,15 @@ pub struct Solver {
 }
 
 impl Solver {
+    /// Runs one stage, adding its wall time to the stage's counter (every stage
+    /// and factorization go through here).
+    pub(super) fn timed<R>(&mut self, stage: Stage, run: impl FnOnce(&mut Self) -> R) -> R {
+        let started = Instant::now();
+        let result = run(self);
+        *self.times.of(stage) += started.elapsed().as_secs_f64();
+        result
+    }
+
     /// The cloth setup.
     pub fn setup(&self) -> &ClothSetup {
         &self.setup

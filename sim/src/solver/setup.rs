@@ -3,9 +3,8 @@
 //! and the workspace.
 
 use std::collections::BTreeMap;
-use std::time::Instant;
 
-use super::{LAGGED_BENDING_SHARE, Solver, StageTimes, Workspace};
+use super::{LAGGED_BENDING_SHARE, Solver, Stage, StageTimes, Workspace};
 use crate::cloth::{ClothMesh, Vec3};
 use crate::constraints::{Attachment, BendingRest, Constraints, Seam, Spring};
 use crate::error::{Error, Result};
@@ -170,23 +169,26 @@ impl Solver {
 
     /// Factorizes the global matrix for `substeps` steps per frame, once per count.
     pub(super) fn system_for(&mut self, substeps: usize) -> Result<()> {
-        if !self.systems.contains_key(&substeps) {
-            let started = Instant::now();
-            let h = self.frame_dt / substeps as f64;
-            let share = self.constraints.bending_share(&self.masses, h);
-            let lag = share < LAGGED_BENDING_SHARE;
-            let system = GlobalSystem::new(
-                &self.masses,
-                &self.constraints,
-                h,
-                &self.pinned,
-                lag,
-                self.symbolic[lag as usize].clone(),
-            )?;
-            self.symbolic[lag as usize] = Some(system.symbolic());
-            self.systems.insert(substeps, system);
-            self.times.factorize += started.elapsed().as_secs_f64();
+        if self.systems.contains_key(&substeps) {
+            return Ok(());
         }
+        self.timed(Stage::Factorize, |s| s.factorize(substeps))
+    }
+
+    fn factorize(&mut self, substeps: usize) -> Result<()> {
+        let h = self.frame_dt / substeps as f64;
+        let share = self.constraints.bending_share(&self.masses, h);
+        let lag = share < LAGGED_BENDING_SHARE;
+        let system = GlobalSystem::new(
+            &self.masses,
+            &self.constraints,
+            h,
+            &self.pinned,
+            lag,
+            self.symbolic[lag as usize].clone(),
+        )?;
+        self.symbolic[lag as usize] = Some(system.symbolic());
+        self.systems.insert(substeps, system);
         Ok(())
     }
 }

@@ -1,8 +1,6 @@
-//! One step as named stages, each timed by [`Solver::timed`]: predict, detect, damp, prepare
+//! One step as named stages, each timed by `Solver::timed`: predict, detect, damp, prepare
 //! the contacts, then the iteration (local projections, body contacts, cloth-cloth contacts,
 //! global solve, residual) until it converges, and finish.
-
-use std::time::Instant;
 
 use rayon::prelude::*;
 
@@ -54,14 +52,6 @@ impl Solver {
         }
         self.timed(Stage::Finish, |s| s.finish(state, h));
         Ok(report)
-    }
-
-    /// Runs one stage, adding its wall time to the stage's counter.
-    fn timed<R>(&mut self, stage: Stage, run: impl FnOnce(&mut Self) -> R) -> R {
-        let started = Instant::now();
-        let result = run(self);
-        *self.times.of(stage) += started.elapsed().as_secs_f64();
-        result
     }
 
     fn predict(&mut self, state: &ClothState, h: f64) {

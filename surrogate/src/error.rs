@@ -1,0 +1,87 @@
+//! Typed errors of the surrogate: what is wrong with a template's UV layout, an array's shape,
+//! a recording or a dataset, naming the file, the key or the index.
+
+use thiserror::Error;
+
+/// Result with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// What can go wrong building geometry images, conditions or training tensors.
+#[derive(Debug, Error)]
+pub enum Error {
+    /// Not a supported resolution.
+    #[error("resolution {resolution} is not supported (32, 64 or 128)")]
+    Resolution {
+        /// The resolution asked for.
+        resolution: usize,
+    },
+    /// The template has no UV triangles.
+    #[error("the template has no UVs (a geometry image needs a UV layout)")]
+    NoUvs,
+    /// A UV triangle refers to a UV corner past the end.
+    #[error("UV triangle {triangle} refers to a UV corner past the {uvs} UVs")]
+    BadUvTriangle {
+        /// The triangle.
+        triangle: usize,
+        /// UV corners of the template.
+        uvs: usize,
+    },
+    /// A UV coordinate is NaN or infinite.
+    #[error("UV corner {corner} is not finite")]
+    NonFiniteUv {
+        /// The UV corner.
+        corner: usize,
+    },
+    /// The mesh and UV triangle counts differ.
+    #[error("{triangles} triangles but {uv_triangles} UV triangles (one per triangle expected)")]
+    UvTriangleCount {
+        /// Mesh triangles.
+        triangles: usize,
+        /// UV triangles.
+        uv_triangles: usize,
+    },
+    /// A triangle refers to a vertex past the end.
+    #[error("triangle {triangle} refers to a vertex past the {vertices} vertices")]
+    BadTriangle {
+        /// The triangle.
+        triangle: usize,
+        /// Vertices of the template.
+        vertices: usize,
+    },
+    /// A vertex belongs to no triangle, so no UV corner gives it a value.
+    #[error("vertex {vertex} has no UV corner (it is in no triangle)")]
+    VertexWithoutUv {
+        /// The vertex.
+        vertex: usize,
+    },
+    /// Per-vertex values of the wrong length.
+    #[error("{got} per-vertex values for a template of {expected} vertices")]
+    VertexCount {
+        /// The template's vertices.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// An image of the wrong size.
+    #[error("an image of {got} texels where {expected} are expected")]
+    TexelCount {
+        /// R * R.
+        expected: usize,
+        /// Texels given.
+        got: usize,
+    },
+    /// A recording or dataset file is unusable.
+    #[error("{path}: {problem}")]
+    File {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// An engine error (recordings, metrics).
+    #[error(transparent)]
+    Sim(#[from] sim::Error),
+    /// A body model or motion error.
+    #[error(transparent)]
+    Motion(#[from] motions::Error),
+}

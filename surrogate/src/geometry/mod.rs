@@ -1,0 +1,13 @@
+//! Geometry images and the frames they live in: the atlas of a template (`atlas.rs`), encode
+//! and readback (`maps.rs`), the canonical frame (`canonical.rs`), the template skinned to a
+//! body (`skinning.rs`) and the two targets (`target.rs`).
+
+mod atlas;
+mod canonical;
+mod maps;
+mod skinning;
+
+pub use atlas::{Atlas, RESOLUTIONS, TexelSample};
+pub use canonical::{Canonical, RootRemoval};
+pub use maps::GeometryImage;
+pub use skinning::{FOLDED_JOINTS, Skinning};
