@@ -231,8 +231,8 @@ impl GeometryImage {
 mod tests {
     use super::*;
 
-    /// A flat n x n grid in the UV square [0.2, 0.8]^2, positions = (u, 0, v): one chart.
-    fn grid(n: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<[f64; 2]>) {
+    /// Triangles and UVs of an n x n grid over the UV square [0.2, 0.8]^2: one chart.
+    fn grid(n: usize) -> (Vec<[u32; 3]>, Vec<[f64; 2]>) {
         let mut uvs = Vec::new();
         for j in 0..n {
             for i in 0..n {
@@ -251,8 +251,7 @@ mod tests {
                 tris.push([a, d, c]);
             }
         }
-        let positions = uvs.iter().map(|p| [p[0], 0.0, p[1]]).collect();
-        (positions, tris, uvs)
+        (tris, uvs)
     }
 
     fn relative_error(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
@@ -266,7 +265,7 @@ mod tests {
 
     #[test]
     fn a_field_affine_in_uv_and_a_constant_round_trip_exactly() {
-        let (_, tris, uvs) = grid(9);
+        let (tris, uvs) = grid(9);
         let image = GeometryImage::new(uvs.len(), &tris, &uvs, &tris, 64).unwrap();
         let affine: Vec<[f64; 3]> = uvs
             .iter()
@@ -283,7 +282,7 @@ mod tests {
 
     #[test]
     fn the_transpose_is_the_adjoint_of_the_readback() {
-        let (_, tris, uvs) = grid(7);
+        let (tris, uvs) = grid(7);
         let image = GeometryImage::new(uvs.len(), &tris, &uvs, &tris, 32).unwrap();
         let r = 32;
         let x: Vec<[f64; 3]> = (0..r * r)
