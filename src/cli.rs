@@ -59,6 +59,38 @@ pub enum Command {
         #[command(subcommand)]
         command: GarmentsCommand,
     },
+    /// The surrogate's UV geometry images of a template or a recording: position map, mask,
+    /// target maps and (for a recording) the round-trip floor, the best any UV model can do.
+    Uv(UvArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct UvArgs {
+    /// A garment (library design, built-in or template OBJ) or a garment recording (.mcap).
+    pub source: String,
+    /// Texels per side: 32, 64 or 128.
+    #[arg(long, default_value_t = 64)]
+    pub resolution: usize,
+    /// Target: `displacement` (canonical cloth minus the rest template) or `lbs_residual`
+    /// (canonical cloth minus the template skinned to the body).
+    #[arg(long, default_value = "displacement", value_parser = ["displacement", "lbs_residual"])]
+    pub target: String,
+    /// Root rotation the canonical frame removes: `heading` or `full`.
+    #[arg(long, default_value = "heading", value_parser = ["heading", "full"])]
+    pub root: String,
+    /// Score every K-th motion frame of a recording.
+    #[arg(long, default_value_t = 5)]
+    pub every: usize,
+    /// Output folder: `position_map.png`, `mask.png`, `target_<k>.png`, `contact_sheet.png`.
+    #[arg(long)]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Write `resolution`, `coverage`, `texel_cm`, `vertices`, `uv_corners`, `charts` and, for
+    /// a recording, `frames_scored`, `roundtrip_E_v_cm`, `roundtrip_p95_cm`,
+    /// `roundtrip_max_cm`, `target_mean_cm`, `target` here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -334,6 +366,36 @@ pub enum DatasetCommand {
         /// Also write `sequences`, `failed`, `frames`, `splits`, ... here.
         #[arg(long)]
         json: Option<PathBuf>,
+    },
+    /// Turn a synthesized dataset (its sequences that passed their gates) into the
+    /// surrogate's training tensors: safetensors shards per split, the templates' position
+    /// maps and masks, and `manifest.json` (layout, train-split normalization, checksums).
+    Tensors {
+        /// Dataset folder (`synth` output with its manifest).
+        dir: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Texels per side: 32, 64 or 128.
+        #[arg(long, default_value_t = 64)]
+        resolution: usize,
+        /// `displacement` or `lbs_residual`.
+        #[arg(long, default_value = "displacement", value_parser = ["displacement", "lbs_residual"])]
+        target: String,
+        /// Earlier frames in each pose window.
+        #[arg(long, default_value_t = 2)]
+        window: usize,
+        /// Every K-th motion frame of a sequence becomes a sample.
+        #[arg(long, default_value_t = 1)]
+        every: usize,
+        /// Frames per shard file.
+        #[arg(long, default_value_t = 2048)]
+        shard_frames: usize,
+        #[command(flatten)]
+        model: ModelArgs,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
     /// Merge shard folders (or one shared folder) into OUT and write its manifest; refuses
     /// while any planned sequence is unfinished.

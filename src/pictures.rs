@@ -242,7 +242,8 @@ fn picture(
     image
 }
 
-fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
+/// Writes a picture as PNG, atomically.
+pub fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
     write_atomic(path, |w| Ok(render::write_png(w, image)?))
 }
 

@@ -11,6 +11,7 @@ mod camera;
 mod colour;
 mod raster;
 mod sheet;
+mod texels;
 pub mod viewer;
 
 pub use camera::{Bounds, Camera, View};
@@ -18,6 +19,7 @@ pub use colour::{ColourScale, draw_colour_bar, draw_text};
 pub use image::RgbImage;
 pub use raster::{Layer, Renderer, Style};
 pub use sheet::{GifWriter, contact_sheet, write_png};
+pub use texels::texel_picture;
 
 /// A point or vector, world units (metres in this project).
 pub type P3 = [f32; 3];

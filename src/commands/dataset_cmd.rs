@@ -5,8 +5,11 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use sim::dataset::{DatasetSpec, ManifestRecord, PlannedSequence, stats};
 use sim::recording::Recording;
+use surrogate::data::{TensorOptions, write_tensors};
+use surrogate::geometry::TargetKind;
 
 use crate::cli::DatasetCommand;
 use crate::dataset_dir::{DatasetDir, finished_record, read_jsonl, sha256_file, write_jsonl};
@@ -17,7 +20,73 @@ pub fn run(command: DatasetCommand) -> Result<()> {
         DatasetCommand::Verify { dir, json } => verify(&dir, json.as_deref()),
         DatasetCommand::Stats { dir, json } => stats_cmd(&dir, json.as_deref()),
         DatasetCommand::Merge { out, dirs } => merge(&out, &dirs),
+        DatasetCommand::Tensors {
+            dir,
+            out,
+            resolution,
+            target,
+            window,
+            every,
+            shard_frames,
+            model,
+            quiet,
+        } => {
+            let options = TensorOptions {
+                resolution,
+                target: TargetKind::parse(&target).context("unknown --target")?,
+                window,
+                every,
+                shard_frames,
+                ..TensorOptions::default()
+            };
+            tensors(&dir, &out, model.model.as_deref(), &options, quiet)
+        }
     }
+}
+
+/// `dataset tensors`: the surrogate's training tensors of a dataset.
+fn tensors(
+    dir: &Path,
+    out: &Path,
+    model: Option<&Path>,
+    options: &TensorOptions,
+    quiet: bool,
+) -> Result<()> {
+    let model = crate::inputs::body_model(model)?;
+    let records: Vec<ManifestRecord> = read_jsonl(&DatasetDir::new(dir).manifest())?;
+    let total = records.iter().filter(|r| r.ok()).count();
+    let bar = ProgressBar::new(total as u64).with_style(
+        ProgressStyle::with_template("tensors [{bar:30}] {pos}/{len} sequences (eta {eta})")?
+            .progress_chars("=> "),
+    );
+    if quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let started = std::time::Instant::now();
+    let manifest = write_tensors(dir, out, &model, options, || bar.inc(1))
+        .with_context(|| format!("making tensors of {}", dir.display()))?;
+    bar.finish_and_clear();
+    let frames: usize = manifest.splits.values().map(|s| s.frames).sum();
+    println!(
+        "tensors: {} sequences, {frames} frames of {} templates at {r} x {r} ({}, window {}, condition {} values) in {:.1} s",
+        total,
+        manifest.templates.len(),
+        manifest.target.name(),
+        manifest.window,
+        manifest.condition_dim,
+        started.elapsed().as_secs_f64(),
+        r = manifest.resolution,
+    );
+    for (split, info) in &manifest.splits {
+        println!(
+            "  {split}: {} frames of {} sequences in {} shards",
+            info.frames,
+            info.sequences,
+            info.shards.len()
+        );
+    }
+    println!("  wrote {}", out.join("manifest.json").display());
+    Ok(())
 }
 
 fn load(dir: &DatasetDir) -> Result<(DatasetSpec, Vec<PlannedSequence>, Vec<ManifestRecord>)> {

@@ -11,6 +11,7 @@ mod regress;
 mod render;
 mod simulate;
 mod synth;
+mod uv;
 
 use anyhow::Result;
 
@@ -31,6 +32,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Body(args) => body::run(&args),
         Command::Motions { command } => motions_cmd::run(command),
         Command::Garments { command } => garments_cmd::run(command),
+        Command::Uv(args) => uv::run(&args),
     }
 }
 

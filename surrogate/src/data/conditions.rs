@@ -12,6 +12,7 @@ use motions::Motion;
 use motions::rotation::axis_angle_to_matrix;
 use serde::{Deserialize, Serialize};
 use sim::Material;
+use sim::dataset::MaterialRanges;
 
 use crate::error::Result;
 
@@ -28,28 +29,6 @@ pub struct Block {
     pub offset: usize,
     /// Length.
     pub size: usize,
-}
-
-/// The ranges the material is normalized over (the dataset's sampling ranges).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct MaterialRanges {
-    /// k_s, N/m.
-    pub k_s: [f64; 2],
-    /// rho, kg/m^2.
-    pub rho: [f64; 2],
-    /// log10 of k_b (N m).
-    pub log10_k_b: [f64; 2],
-}
-
-impl Default for MaterialRanges {
-    /// The paper's ranges.
-    fn default() -> Self {
-        Self {
-            k_s: [40.0, 200.0],
-            rho: [0.01, 0.7],
-            log10_k_b: [-8.0, -4.0],
-        }
-    }
 }
 
 /// Maps `x` from `[lo, hi]` to [-1, 1] (0 for an empty range).

@@ -1,5 +1,14 @@
-//! What a model learns from: the condition vector of a frame (`conditions.rs`).
+//! What a model learns from: the condition vector of a frame (`conditions.rs`), recorded
+//! sequences with their UV round-trip floor (`sequence.rs`), and a dataset as training tensors
+//! (`tensors.rs`).
 
 mod conditions;
+mod sequence;
+mod tensors;
 
-pub use conditions::{Block, CONDITION_JOINTS, ConditionLayout, MaterialRanges};
+pub use conditions::{Block, CONDITION_JOINTS, ConditionLayout};
+pub use sequence::{Floor, Sequence, roundtrip_floor};
+pub use tensors::{
+    Normalization, ShardInfo, SplitInfo, Stats, TemplateInfo, TensorManifest, TensorOptions,
+    write_tensors,
+};

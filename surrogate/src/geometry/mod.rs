@@ -6,8 +6,10 @@ mod atlas;
 mod canonical;
 mod maps;
 mod skinning;
+mod target;
 
 pub use atlas::{Atlas, RESOLUTIONS, TexelSample};
 pub use canonical::{Canonical, RootRemoval};
 pub use maps::GeometryImage;
 pub use skinning::{FOLDED_JOINTS, Skinning};
+pub use target::{FrameBody, TargetKind, Targets};

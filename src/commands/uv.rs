@@ -1,0 +1,196 @@
+//! `dit-garment uv`: the surrogate's geometry images of a template or a recording, as
+//! pictures (position map, mask, target maps, a contact sheet), and for a recording the UV
+//! round-trip floor (the ground truth encoded, read back and scored).
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use render::{ColourScale, RgbImage, contact_sheet, draw_colour_bar, texel_picture};
+use serde_json::json;
+use sim::recording::TemplateArrays;
+use surrogate::data::{Sequence, roundtrip_floor};
+use surrogate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
+
+use crate::cli::UvArgs;
+use crate::inputs;
+use crate::output::write_json;
+use crate::pictures::write_png;
+
+/// Pixels per side of every picture (texels are drawn as blocks).
+const PICTURE_PIXELS: u32 = 384;
+
+/// Target maps drawn for a recording.
+const TARGET_PICTURES: usize = 4;
+
+/// Physical size of a texel, cm: the square root of the template's 3D area over its UV area,
+/// over the resolution.
+fn texel_cm(t: &TemplateArrays, resolution: usize) -> f64 {
+    let area3 = |tri: &[u32; 3]| {
+        let [a, b, c] = tri.map(|i| nalgebra::Vector3::from(t.positions[i as usize]));
+        0.5 * (b - a).cross(&(c - a)).norm()
+    };
+    let area2 = |tri: &[u32; 3]| {
+        let [a, b, c] = tri.map(|i| t.uvs[i as usize]);
+        0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs()
+    };
+    let surface: f64 = t.triangles.iter().map(area3).sum();
+    let uv: f64 = t.uv_triangles.iter().map(area2).sum();
+    100.0 * (surface / uv.max(1e-12)).sqrt() / resolution as f64
+}
+
+/// Per-channel colours of a vector image over the texels of `mask` (the others dimmed).
+fn vector_picture(image: &[[f64; 3]], mask: &[bool], resolution: usize) -> RgbImage {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (v, _) in image.iter().zip(mask).filter(|(_, m)| **m) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    let pixels = PICTURE_PIXELS / resolution as u32;
+    texel_picture(resolution, pixels, |t| {
+        let dim = if mask[t] { 1.0 } else { 0.35 };
+        std::array::from_fn(|k| {
+            let span = (hi[k] - lo[k]).max(1e-12);
+            (255.0 * dim * ((image[t][k] - lo[k]) / span).clamp(0.0, 1.0)) as u8
+        })
+    })
+}
+
+/// Target magnitude (cm) on the viridis scale with a colour bar; outside texels grey.
+fn magnitude_picture(image: &[[f64; 3]], mask: &[bool], r: usize, scale: ColourScale) -> RgbImage {
+    let mut picture = texel_picture(r, PICTURE_PIXELS / r as u32, |t| {
+        if !mask[t] {
+            return [200, 200, 200];
+        }
+        let v = image[t];
+        let cm = 100.0 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        scale.colour(cm as f32)
+    });
+    draw_colour_bar(&mut picture, &scale, "cm");
+    picture
+}
+
+pub fn run(args: &UvArgs) -> Result<()> {
+    let kind = TargetKind::parse(&args.target).context("unknown --target")?;
+    let removal = match args.root.as_str() {
+        "full" => RootRemoval::Full,
+        _ => RootRemoval::Heading,
+    };
+    let model = inputs::body_model(args.model.model.as_deref())?;
+    let is_recording = args.source.ends_with(".mcap");
+    let (template, sequence) = if is_recording {
+        let sequence = Sequence::read(Path::new(&args.source))?;
+        (sequence.template.clone(), Some(sequence))
+    } else {
+        let (g, _) = inputs::garment(&args.source, &model)?;
+        let t = TemplateArrays {
+            positions: g.positions,
+            triangles: g.triangles,
+            uvs: g.uvs,
+            uv_triangles: g.uv_triangles,
+        };
+        (t, None)
+    };
+    let image = GeometryImage::new(
+        template.positions.len(),
+        &template.triangles,
+        &template.uvs,
+        &template.uv_triangles,
+        args.resolution,
+    )
+    .with_context(|| format!("{}: geometry image", args.source))?;
+    let r = args.resolution;
+    let atlas = image.atlas();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut tiles = Vec::new();
+    let position = image.encode(&template.positions)?;
+    let inside = atlas.inside().to_vec();
+    tiles.push((
+        vector_picture(&position, &inside, r),
+        "position map".to_string(),
+    ));
+    let loss_mask = image.loss_mask();
+    let mask = texel_picture(r, PICTURE_PIXELS / r as u32, |t| {
+        match (inside[t], loss_mask[t]) {
+            (true, _) => [255, 255, 255],
+            (false, true) => [150, 150, 150],
+            _ => [0, 0, 0],
+        }
+    });
+    tiles.push((mask, "mask (grey: read back)".to_string()));
+    let mut summary = json!({
+        "source": args.source, "resolution": r, "coverage": atlas.coverage(),
+        "texel_cm": texel_cm(&template, r), "vertices": template.positions.len(),
+        "uv_corners": template.uvs.len(), "charts": atlas.charts(),
+        "root": args.root,
+    });
+    if let Some(sequence) = &sequence {
+        let mut targets = Targets::new(&model, &template.positions, kind, removal)?;
+        let floor = roundtrip_floor(&model, sequence, &image, &mut targets, args.every)?;
+        let first = sequence.first_motion_frame();
+        let frames: Vec<usize> = (0..TARGET_PICTURES)
+            .map(|i| first + (sequence.len() - 1 - first) * i / (TARGET_PICTURES - 1))
+            .collect();
+        let scale = ColourScale {
+            min: 0.0,
+            max: (floor.target_mean_cm * 3.0).max(1.0) as f32,
+        };
+        for &k in &frames {
+            let target = targets.encode(&model, sequence.body(k), &sequence.garment[k])?;
+            let map = image.encode(&target)?;
+            tiles.push((
+                magnitude_picture(&map, &inside, r, scale),
+                format!("{} frame {k}", kind.name()),
+            ));
+        }
+        summary["target"] = kind.name().into();
+        summary["frames_scored"] = floor.frames_scored.into();
+        summary["roundtrip_E_v_cm"] = floor.mean_cm.into();
+        summary["roundtrip_p95_cm"] = floor.p95_cm.into();
+        summary["roundtrip_max_cm"] = floor.max_cm.into();
+        summary["worst_vertex"] = floor.worst_vertex.into();
+        summary["target_mean_cm"] = floor.target_mean_cm.into();
+        summary["target_frames"] = json!(frames);
+    }
+    let names = ["position_map.png", "mask.png"];
+    for (i, (tile, _)) in tiles.iter().enumerate() {
+        let name = match names.get(i) {
+            Some(n) => n.to_string(),
+            None => format!("target_{}.png", i - names.len()),
+        };
+        write_png(&args.out.join(name), tile)?;
+    }
+    let sheet = args.out.join("contact_sheet.png");
+    write_png(&sheet, &contact_sheet(&tiles, 3))?;
+    summary["contact_sheet"] = json!(sheet);
+    println!(
+        "uv: '{}' at {r} x {r}: {} vertices, {} UV corners, {} charts, coverage {:.2}, texel {:.2} cm{}",
+        args.source,
+        template.positions.len(),
+        template.uvs.len(),
+        atlas.charts(),
+        atlas.coverage(),
+        summary["texel_cm"].as_f64().unwrap_or(0.0),
+        match &sequence {
+            Some(_) => format!(
+                "; round trip ({}, {} frames): mean {:.3} cm, p95 {:.3} cm, max {:.2} cm (vertex {}); mean target {:.2} cm",
+                kind.name(),
+                summary["frames_scored"],
+                summary["roundtrip_E_v_cm"].as_f64().unwrap_or(0.0),
+                summary["roundtrip_p95_cm"].as_f64().unwrap_or(0.0),
+                summary["roundtrip_max_cm"].as_f64().unwrap_or(0.0),
+                summary["worst_vertex"],
+                summary["target_mean_cm"].as_f64().unwrap_or(0.0),
+            ),
+            None => String::new(),
+        }
+    );
+    println!("  wrote {}", sheet.display());
+    if let Some(path) = &args.json {
+        write_json(path, &summary)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,183 @@
+//! A recorded garment sequence as the surrogate uses it: the template, and per frame the body
+//! (pose, translation, shape) and the cloth, read through `sim::recording`; and the UV
+//! round-trip floor of a sequence (encode the ground truth, read it back, score it: the best
+//! any UV model can do at that resolution).
+
+use std::path::Path;
+
+use motions::{BodyModel, FramePose, Motion, POSE_DIM};
+use sim::recording::{Recording, SequenceMeta, TemplateArrays};
+
+use crate::error::{Error, Result};
+use crate::geometry::{FrameBody, GeometryImage, Targets};
+
+/// A garment sequence read back.
+#[derive(Debug, Clone)]
+pub struct Sequence {
+    /// The recording's metadata.
+    pub meta: SequenceMeta,
+    /// The template.
+    pub template: TemplateArrays,
+    /// Body pose and root translation per frame.
+    pub poses: Vec<FramePose>,
+    /// Body shape per frame.
+    pub betas: Vec<Vec<f64>>,
+    /// Garment vertices per frame, m.
+    pub garment: Vec<Vec<[f64; 3]>>,
+}
+
+impl Sequence {
+    /// Reads a garment recording; a missing, damaged or foreign file is an error naming it.
+    pub fn read(path: &Path) -> Result<Self> {
+        let name = path.display().to_string();
+        let fail = |problem: String| Error::File {
+            path: name.clone(),
+            problem,
+        };
+        let r = Recording::read(path)?;
+        let meta = r
+            .meta
+            .ok_or_else(|| fail("the recording has no metadata".into()))?;
+        if r.template.uv_triangles.len() != r.template.triangles.len() || r.template.uvs.is_empty()
+        {
+            return Err(fail("the template has no UVs".into()));
+        }
+        if r.poses.len() != r.garment.len() {
+            return Err(fail(format!(
+                "{} body poses for {} garment frames",
+                r.poses.len(),
+                r.garment.len()
+            )));
+        }
+        let mut poses = Vec::with_capacity(r.poses.len());
+        let mut betas = Vec::with_capacity(r.poses.len());
+        for (k, p) in r.poses.iter().enumerate() {
+            let pose: [f64; POSE_DIM] = p.pose.as_slice().try_into().map_err(|_| {
+                fail(format!(
+                    "frame {k} has {} pose values, not {POSE_DIM}",
+                    p.pose.len()
+                ))
+            })?;
+            poses.push(FramePose {
+                pose,
+                transl: p.transl,
+            });
+            betas.push(p.betas.clone());
+        }
+        let garment = r
+            .garment
+            .iter()
+            .map(|f| f.iter().map(|p| p.map(f64::from)).collect())
+            .collect();
+        Ok(Self {
+            meta,
+            template: r.template,
+            poses,
+            betas,
+            garment,
+        })
+    }
+
+    /// Frames recorded.
+    pub fn len(&self) -> usize {
+        self.garment.len()
+    }
+
+    /// Whether no frame was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.garment.is_empty()
+    }
+
+    /// The first frame of the motion proper (after the blend-in and settle frames): the
+    /// frames a model learns from and is scored on.
+    pub fn first_motion_frame(&self) -> usize {
+        (self.meta.blend_frames + self.meta.settle_frames).min(self.len().saturating_sub(1))
+    }
+
+    /// The motion the body followed (blend-in included), for pose windows.
+    pub fn motion(&self) -> Result<Motion> {
+        Ok(Motion::new(
+            self.meta.motion.clone(),
+            self.meta.fps,
+            self.poses.clone(),
+        )?)
+    }
+
+    /// The body of frame `k`.
+    pub fn body(&self, k: usize) -> FrameBody<'_> {
+        FrameBody {
+            pose: &self.poses[k],
+            betas: &self.betas[k],
+        }
+    }
+}
+
+/// The round-trip floor of a sequence at one resolution and target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Floor {
+    /// Frames scored (every `stride`-th motion frame).
+    pub frames_scored: usize,
+    /// Mean over frames of the mean vertex distance, cm (E_v of the round trip).
+    pub mean_cm: f64,
+    /// 95th percentile of vertex distances over the scored frames, cm.
+    pub p95_cm: f64,
+    /// Largest vertex distance, cm.
+    pub max_cm: f64,
+    /// The vertex of the largest distance.
+    pub worst_vertex: usize,
+    /// Mean target magnitude, cm (what a model must predict).
+    pub target_mean_cm: f64,
+}
+
+/// Encodes every `stride`-th motion frame's target, reads it back, decodes it and measures the
+/// distance to the recorded cloth.
+pub fn roundtrip_floor(
+    model: &BodyModel,
+    sequence: &Sequence,
+    image: &GeometryImage,
+    targets: &mut Targets,
+    stride: usize,
+) -> Result<Floor> {
+    let mut distances = Vec::new();
+    let mut frame_means = Vec::new();
+    let mut magnitude = (0.0, 0usize);
+    let mut worst = (0.0f64, 0usize);
+    for k in (sequence.first_motion_frame()..sequence.len()).step_by(stride.max(1)) {
+        let body = sequence.body(k);
+        let truth = &sequence.garment[k];
+        let target = targets.encode(model, body, truth)?;
+        for t in &target {
+            magnitude.0 += (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+            magnitude.1 += 1;
+        }
+        let read = image.read(&image.encode(&target)?)?;
+        let cloth = targets.decode(model, body, &read)?;
+        let mut sum = 0.0;
+        for (v, (a, b)) in cloth.iter().zip(truth).enumerate() {
+            let d = 100.0
+                * ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            if d > worst.0 {
+                worst = (d, v);
+            }
+            sum += d;
+            distances.push(d);
+        }
+        frame_means.push(sum / truth.len().max(1) as f64);
+    }
+    if frame_means.is_empty() {
+        return Err(Error::File {
+            path: sequence.meta.motion.clone(),
+            problem: "the sequence has no motion frames to score".into(),
+        });
+    }
+    distances.sort_by(f64::total_cmp);
+    let p95 = distances[((distances.len() as f64 * 0.95) as usize).min(distances.len() - 1)];
+    Ok(Floor {
+        frames_scored: frame_means.len(),
+        mean_cm: frame_means.iter().sum::<f64>() / frame_means.len() as f64,
+        p95_cm: p95,
+        max_cm: worst.0,
+        worst_vertex: worst.1,
+        target_mean_cm: 100.0 * magnitude.0 / magnitude.1.max(1) as f64,
+    })
+}

@@ -1,0 +1,510 @@
+//! A synthesized dataset (`synth` output) as training tensors: per split, safetensors shards
+//! of frames (`conditions` [N, D] f32, `targets` [N, 3, R, R] f32, `template_index` [N] i64,
+//! `sequence_index` and `frame_index` [N] i64), `templates.safetensors` (`position_maps`
+//! [G, 3, R, R], `masks` [G, 1, R, R], `inside` [G, 1, R, R]) and `manifest.json` (layout,
+//! normalization statistics of the train split, counts, checksums). Same input, same bytes.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use motions::BodyModel;
+use rayon::prelude::*;
+use safetensors::tensor::{Dtype, TensorView};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use sim::dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
+use sim::recording::TemplateArrays;
+
+use super::conditions::{Block, ConditionLayout};
+use super::sequence::Sequence;
+use crate::error::{Error, Result};
+use crate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
+
+/// How a dataset becomes tensors.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TensorOptions {
+    /// Texels per side.
+    pub resolution: usize,
+    /// What the targets hold.
+    pub target: TargetKind,
+    /// Earlier frames in each pose window.
+    pub window: usize,
+    /// Every K-th motion frame of a sequence becomes a sample.
+    pub every: usize,
+    /// Root rotation removed by the canonical frame.
+    pub root: RootRemoval,
+    /// Frames per shard.
+    pub shard_frames: usize,
+}
+
+impl Default for TensorOptions {
+    fn default() -> Self {
+        Self {
+            resolution: 64,
+            target: TargetKind::Displacement,
+            window: 2,
+            every: 1,
+            root: RootRemoval::Heading,
+            shard_frames: 2048,
+        }
+    }
+}
+
+/// Mean and standard deviation per channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    /// Means.
+    pub mean: Vec<f64>,
+    /// Standard deviations (1 where a channel is constant).
+    pub std: Vec<f64>,
+}
+
+/// One shard file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ShardInfo {
+    /// File name in the tensors folder.
+    pub file: String,
+    /// Frames in it.
+    pub frames: usize,
+    /// SHA-256 of the file, hex.
+    pub sha256: String,
+}
+
+/// Counts of one split.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SplitInfo {
+    /// Frames (samples).
+    pub frames: usize,
+    /// Sequences.
+    pub sequences: usize,
+    /// Shard files, in order.
+    pub shards: Vec<ShardInfo>,
+}
+
+/// One template.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TemplateInfo {
+    /// Garment name (as in the dataset's manifest).
+    pub name: String,
+    /// Its index in `templates.safetensors` and `template_index`.
+    pub index: usize,
+    /// Vertices.
+    pub vertices: usize,
+    /// Inside texels over all texels.
+    pub coverage: f64,
+    /// Frames per split using it.
+    pub frames: BTreeMap<String, usize>,
+}
+
+/// Normalization statistics, computed on the train split only.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Normalization {
+    /// Per target channel over the loss-mask texels of train frames.
+    pub targets: Stats,
+    /// Per condition dimension over train frames.
+    pub conditions: Stats,
+    /// Per channel of the position maps of the templates train frames use, over inside texels.
+    pub position_maps: Stats,
+}
+
+/// `manifest.json` of a tensors folder.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TensorManifest {
+    /// Format version.
+    pub format: u32,
+    /// The dataset folder the tensors came from.
+    pub source: String,
+    /// Texels per side.
+    pub resolution: usize,
+    /// `displacement` or `lbs_residual`.
+    pub target: TargetKind,
+    /// Earlier frames in each pose window.
+    pub window: usize,
+    /// Motion frame stride.
+    pub every: usize,
+    /// Root rotation the canonical frame removes.
+    pub root: RootRemoval,
+    /// Condition vector blocks.
+    pub condition: Vec<Block>,
+    /// Condition vector length.
+    pub condition_dim: usize,
+    /// Material normalization ranges (the dataset spec's).
+    pub material_ranges: MaterialRanges,
+    /// The body model the conditions and targets were made with.
+    pub body_model: String,
+    /// Per split: frames, sequences, shards.
+    pub splits: BTreeMap<String, SplitInfo>,
+    /// The templates, in index order.
+    pub templates: Vec<TemplateInfo>,
+    /// `templates.safetensors` checksum.
+    pub templates_sha256: String,
+    /// Normalization statistics (train split).
+    pub normalization: Normalization,
+}
+
+/// One sample.
+struct Frame {
+    condition: Vec<f32>,
+    target: Vec<f32>,
+    template: usize,
+    sequence: usize,
+    frame: usize,
+}
+
+/// Channels-last `[f64; 3]` texels as channels-first f32 `[3, R, R]`.
+fn channels_first(image: &[[f64; 3]]) -> Vec<f32> {
+    (0..3)
+        .flat_map(|c| image.iter().map(move |t| t[c] as f32))
+        .collect()
+}
+
+fn f32_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+fn i64_bytes(values: impl Iterator<Item = usize>) -> Vec<u8> {
+    values.flat_map(|v| (v as i64).to_le_bytes()).collect()
+}
+
+fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
+    Error::File {
+        path: path.display().to_string(),
+        problem: problem.to_string(),
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary name, so a stopped run leaves no half file.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<String> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(|e| file_error(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))?;
+    Ok(hex(&Sha256::digest(bytes)))
+}
+
+fn hex(digest: &[u8]) -> String {
+    digest.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Serializes named tensors (f32 or i64 little-endian bytes with their shapes).
+fn safetensors_bytes(
+    tensors: &[(&str, Dtype, Vec<usize>, Vec<u8>)],
+    path: &Path,
+) -> Result<Vec<u8>> {
+    let views = tensors
+        .iter()
+        .map(|(name, dtype, shape, bytes)| {
+            TensorView::new(*dtype, shape.clone(), bytes)
+                .map(|v| (name.to_string(), v))
+                .map_err(|e| file_error(path, e))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    safetensors::serialize(views, None).map_err(|e| file_error(path, e))
+}
+
+/// Mean and standard deviation of `count` samples accumulated as sums.
+fn stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
+    let mean: Vec<f64> = sum.iter().map(|s| s / count.max(1.0)).collect();
+    let std = sum2
+        .iter()
+        .zip(&mean)
+        .map(|(s2, m)| {
+            let var = (s2 / count.max(1.0) - m * m).max(0.0);
+            if var > 1e-24 { var.sqrt() } else { 1.0 }
+        })
+        .collect();
+    Stats { mean, std }
+}
+
+/// The dataset's finished sequences, checked against their checksums.
+fn finished(dir: &Path) -> Result<Vec<ManifestRecord>> {
+    let path = dir.join("manifest.jsonl");
+    let text = std::fs::read_to_string(&path).map_err(|e| file_error(&path, e))?;
+    let mut records = Vec::new();
+    for (i, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let r: ManifestRecord = serde_json::from_str(line)
+            .map_err(|e| file_error(&path, format!("line {}: {e}", i + 1)))?;
+        if !r.ok() {
+            continue;
+        }
+        let (Some(file), Some(sha)) = (&r.file, &r.sha256) else {
+            return Err(file_error(
+                &path,
+                format!("sequence {} has no recording", r.id),
+            ));
+        };
+        let seq = dir.join(file);
+        let bytes = std::fs::read(&seq).map_err(|e| file_error(&seq, e))?;
+        if &hex(&Sha256::digest(&bytes)) != sha {
+            return Err(file_error(
+                &seq,
+                "does not match the manifest's checksum (damaged or replaced)",
+            ));
+        }
+        records.push(r);
+    }
+    Ok(records)
+}
+
+/// Turns the dataset in `dir` into tensors in `out`; `progress` is called once per sequence.
+pub fn write_tensors(
+    dir: &Path,
+    out: &Path,
+    model: &BodyModel,
+    options: &TensorOptions,
+    progress: impl Fn() + Sync,
+) -> Result<TensorManifest> {
+    let spec = DatasetSpec::load(&dir.join("spec.toml"))?;
+    let records = finished(dir)?;
+    let layout = ConditionLayout {
+        betas: model.num_betas(),
+        window: options.window,
+        material: spec.material,
+    };
+    // Templates by garment name, from the recordings (sorted names give the indices).
+    let mut names: Vec<&str> = records.iter().map(|r| r.garment.as_str()).collect();
+    names.sort_unstable();
+    names.dedup();
+    let sequences: Vec<(PathBuf, Sequence)> = records
+        .par_iter()
+        .map(|r| {
+            let path = dir.join(r.file.as_deref().unwrap_or_default());
+            Sequence::read(&path).map(|s| (path, s))
+        })
+        .collect::<Result<_>>()?;
+    let mut templates: Vec<Option<(TemplateArrays, GeometryImage)>> = vec![None; names.len()];
+    for ((path, s), r) in sequences.iter().zip(&records) {
+        let g = names.binary_search(&r.garment.as_str()).unwrap_or(0);
+        match &templates[g] {
+            Some((t, _)) if t.positions.len() != s.template.positions.len() => {
+                return Err(file_error(
+                    path,
+                    format!(
+                        "garment '{}' has {} vertices here and {} in another sequence",
+                        r.garment,
+                        s.template.positions.len(),
+                        t.positions.len()
+                    ),
+                ));
+            }
+            Some(_) => {}
+            None => {
+                let t = &s.template;
+                let image = GeometryImage::new(
+                    t.positions.len(),
+                    &t.triangles,
+                    &t.uvs,
+                    &t.uv_triangles,
+                    options.resolution,
+                )
+                .map_err(|e| file_error(path, e))?;
+                templates[g] = Some((t.clone(), image));
+            }
+        }
+    }
+    let templates: Vec<(TemplateArrays, GeometryImage)> = templates.into_iter().flatten().collect();
+    std::fs::create_dir_all(out).map_err(|e| file_error(out, e))?;
+    let r = options.resolution;
+    let mut manifest_splits = BTreeMap::new();
+    let mut template_frames = vec![BTreeMap::<String, usize>::new(); templates.len()];
+    let dim = layout.dim();
+    let (mut t_sum, mut t_sum2, mut t_count) = (vec![0.0; 3], vec![0.0; 3], 0.0);
+    let (mut c_sum, mut c_sum2, mut c_count) = (vec![0.0; dim], vec![0.0; dim], 0.0);
+    let mut train_templates = vec![false; templates.len()];
+    for split in SPLITS {
+        let members: Vec<usize> = (0..records.len())
+            .filter(|&i| records[i].split == split)
+            .collect();
+        if members.is_empty() {
+            continue;
+        }
+        let frames: Vec<Vec<Frame>> = members
+            .par_iter()
+            .map(|&i| {
+                let (path, s) = &sequences[i];
+                let g = names
+                    .binary_search(&records[i].garment.as_str())
+                    .unwrap_or(0);
+                let (template, image) = &templates[g];
+                let mut targets =
+                    Targets::new(model, &template.positions, options.target, options.root)?;
+                let motion = s.motion()?;
+                let mut out = Vec::new();
+                for k in (s.first_motion_frame()..s.len()).step_by(options.every.max(1)) {
+                    let condition = layout.vector(&motion, k, &s.betas[k], &s.meta.material)?;
+                    let target = targets.encode(model, s.body(k), &s.garment[k])?;
+                    let map = image.encode(&target).map_err(|e| file_error(path, e))?;
+                    out.push(Frame {
+                        condition: condition.iter().map(|&x| x as f32).collect(),
+                        target: channels_first(&map),
+                        template: g,
+                        sequence: i,
+                        frame: k,
+                    });
+                }
+                progress();
+                Ok(out)
+            })
+            .collect::<Result<_>>()?;
+        let frames: Vec<Frame> = frames.into_iter().flatten().collect();
+        if split == "train" {
+            for f in &frames {
+                train_templates[f.template] = true;
+                let mask = templates[f.template].1.loss_mask();
+                for c in 0..3 {
+                    for (k, &m) in mask.iter().enumerate() {
+                        if m {
+                            let x = f.target[c * r * r + k] as f64;
+                            t_sum[c] += x;
+                            t_sum2[c] += x * x;
+                        }
+                    }
+                }
+                t_count += mask.iter().filter(|&&m| m).count() as f64;
+                for (d, &x) in f.condition.iter().enumerate() {
+                    c_sum[d] += x as f64;
+                    c_sum2[d] += x as f64 * x as f64;
+                }
+                c_count += 1.0;
+            }
+        }
+        for f in &frames {
+            *template_frames[f.template]
+                .entry(split.to_string())
+                .or_default() += 1;
+        }
+        let mut info = SplitInfo {
+            frames: frames.len(),
+            sequences: members.len(),
+            shards: Vec::new(),
+        };
+        for (n, chunk) in frames.chunks(options.shard_frames.max(1)).enumerate() {
+            let file = format!("{split}-{n:04}.safetensors");
+            let path = out.join(&file);
+            let count = chunk.len();
+            let conditions: Vec<f32> = chunk
+                .iter()
+                .flat_map(|f| f.condition.iter().copied())
+                .collect();
+            let targets: Vec<f32> = chunk
+                .iter()
+                .flat_map(|f| f.target.iter().copied())
+                .collect();
+            let bytes = safetensors_bytes(
+                &[
+                    (
+                        "conditions",
+                        Dtype::F32,
+                        vec![count, dim],
+                        f32_bytes(&conditions),
+                    ),
+                    (
+                        "targets",
+                        Dtype::F32,
+                        vec![count, 3, r, r],
+                        f32_bytes(&targets),
+                    ),
+                    (
+                        "template_index",
+                        Dtype::I64,
+                        vec![count],
+                        i64_bytes(chunk.iter().map(|f| f.template)),
+                    ),
+                    (
+                        "sequence_index",
+                        Dtype::I64,
+                        vec![count],
+                        i64_bytes(chunk.iter().map(|f| f.sequence)),
+                    ),
+                    (
+                        "frame_index",
+                        Dtype::I64,
+                        vec![count],
+                        i64_bytes(chunk.iter().map(|f| f.frame)),
+                    ),
+                ],
+                &path,
+            )?;
+            let sha256 = write_atomic(&path, &bytes)?;
+            info.shards.push(ShardInfo {
+                file,
+                frames: count,
+                sha256,
+            });
+        }
+        manifest_splits.insert(split.to_string(), info);
+    }
+    // Templates: position maps, loss masks and inside masks, channels first.
+    let g = templates.len();
+    let mut positions = Vec::with_capacity(g * 3 * r * r);
+    let mut masks = Vec::with_capacity(g * r * r);
+    let mut inside = Vec::with_capacity(g * r * r);
+    let (mut p_sum, mut p_sum2, mut p_count) = (vec![0.0; 3], vec![0.0; 3], 0.0);
+    for (i, (t, image)) in templates.iter().enumerate() {
+        let map = image.encode(&t.positions).map_err(|e| file_error(out, e))?;
+        positions.extend(channels_first(&map));
+        masks.extend(image.loss_mask().iter().map(|&m| m as u8 as f32));
+        inside.extend(image.atlas().inside().iter().map(|&m| m as u8 as f32));
+        if train_templates[i] {
+            for (p, _) in map.iter().zip(image.atlas().inside()).filter(|(_, m)| **m) {
+                for c in 0..3 {
+                    p_sum[c] += p[c];
+                    p_sum2[c] += p[c] * p[c];
+                }
+                p_count += 1.0;
+            }
+        }
+    }
+    let path = out.join("templates.safetensors");
+    let bytes = safetensors_bytes(
+        &[
+            (
+                "position_maps",
+                Dtype::F32,
+                vec![g, 3, r, r],
+                f32_bytes(&positions),
+            ),
+            ("masks", Dtype::F32, vec![g, 1, r, r], f32_bytes(&masks)),
+            ("inside", Dtype::F32, vec![g, 1, r, r], f32_bytes(&inside)),
+        ],
+        &path,
+    )?;
+    let templates_sha256 = write_atomic(&path, &bytes)?;
+    let manifest = TensorManifest {
+        format: 1,
+        source: dir.display().to_string(),
+        resolution: r,
+        target: options.target,
+        window: options.window,
+        every: options.every,
+        root: options.root,
+        condition: layout.blocks(),
+        condition_dim: dim,
+        material_ranges: spec.material,
+        body_model: model.name().to_string(),
+        splits: manifest_splits,
+        templates: templates
+            .iter()
+            .enumerate()
+            .map(|(i, (t, image))| TemplateInfo {
+                name: names[i].to_string(),
+                index: i,
+                vertices: t.positions.len(),
+                coverage: image.atlas().coverage(),
+                frames: template_frames[i].clone(),
+            })
+            .collect(),
+        templates_sha256,
+        normalization: Normalization {
+            targets: stats(&t_sum, &t_sum2, t_count),
+            conditions: stats(&c_sum, &c_sum2, c_count),
+            position_maps: stats(&p_sum, &p_sum2, p_count),
+        },
+    };
+    let json = serde_json::to_vec_pretty(&manifest).map_err(|e| file_error(out, e))?;
+    write_atomic(&out.join("manifest.json"), &json)?;
+    Ok(manifest)
+}
