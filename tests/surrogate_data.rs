@@ -1,0 +1,247 @@
+//! End-to-end: the surrogate's data as users make it: `uv` pictures and round-trip floor of a
+//! recording and a template, and `dataset tensors` of a small dataset (same input, same
+//! bytes; shards read in Python with the public `safetensors` and `numpy` packages; a damaged
+//! recording named in the error, nothing written).
+
+mod common;
+
+use std::path::Path;
+
+use common::{json, ok, run_with};
+use serde_json::Value;
+
+/// Two skirt sequences on walk, one train and one test (motion unseen), 12 frames each.
+const SPEC: &str = r#"
+name = "surrogate-data"
+seed = 3
+[sequence]
+frames = 12
+blend_frames = 3
+settle_frames = 1
+shapes_per_motion = 1
+draws_per_shape = 1
+[solver]
+substeps = 1
+max_iterations = 4
+[[garments]]
+name = "skirt"
+split = "train"
+[[motions]]
+source = "walk"
+split = "train"
+[[motions]]
+source = "arm_swing"
+split = "test"
+[splits]
+test_motion = 1
+"#;
+
+fn synth(dir: &Path) -> std::path::PathBuf {
+    let spec = dir.join("spec.toml");
+    std::fs::write(&spec, SPEC).unwrap();
+    let data = dir.join("data");
+    ok(&[
+        "synth",
+        "--spec",
+        spec.to_str().unwrap(),
+        "--out",
+        data.to_str().unwrap(),
+        "--quiet",
+    ]);
+    data
+}
+
+#[test]
+fn uv_draws_maps_and_measures_the_round_trip_floor() {
+    let dir = tempfile::tempdir().unwrap();
+    let seq = dir.path().join("walk.mcap");
+    ok(&[
+        "simulate",
+        "--motion",
+        "walk:duration=0.5",
+        "--blend-frames",
+        "3",
+        "--settle-frames",
+        "1",
+        "--substeps",
+        "1",
+        "--iterations",
+        "4",
+        "--out",
+        seq.to_str().unwrap(),
+        "--quiet",
+    ]);
+    for target in ["displacement", "lbs_residual"] {
+        let out = dir.path().join(format!("uv-{target}"));
+        let report = out.join("uv.json");
+        ok(&[
+            "uv",
+            seq.to_str().unwrap(),
+            "--target",
+            target,
+            "--every",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+            "--json",
+            report.to_str().unwrap(),
+        ]);
+        let j = json(&report);
+        assert_eq!(j["resolution"], 64);
+        assert_eq!(j["target"], target);
+        let coverage = j["coverage"].as_f64().unwrap();
+        assert!(coverage > 0.3 && coverage < 0.9, "coverage {coverage}");
+        assert!(j["frames_scored"].as_u64().unwrap() >= 5, "{j}");
+        let floor = j["roundtrip_E_v_cm"].as_f64().unwrap();
+        let p95 = j["roundtrip_p95_cm"].as_f64().unwrap();
+        let max = j["roundtrip_max_cm"].as_f64().unwrap();
+        let target_mean = j["target_mean_cm"].as_f64().unwrap();
+        // The floor is far below what a model must predict, and ordered.
+        assert!(floor > 0.0 && floor < 0.3, "floor {floor} cm");
+        assert!(floor <= p95 && p95 <= max && max < 3.0, "{j}");
+        assert!(
+            target_mean > 5.0 * floor,
+            "target {target_mean} cm, floor {floor} cm"
+        );
+        for picture in ["position_map.png", "mask.png", "contact_sheet.png"] {
+            assert!(out.join(picture).exists(), "{picture} missing");
+        }
+        assert_eq!(j["vertices"], 5040);
+        assert!(j["uv_corners"].as_u64().unwrap() >= 5040);
+        assert!(j["texel_cm"].as_f64().unwrap() > 0.5);
+    }
+    // A template alone: maps, no floor.
+    let out = dir.path().join("uv-template");
+    let report = out.join("uv.json");
+    ok(&[
+        "uv",
+        "skirt",
+        "--resolution",
+        "32",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    let j = json(&report);
+    assert_eq!(j["resolution"], 32);
+    assert!(j.get("roundtrip_E_v_cm").is_none());
+}
+
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            (name, std::fs::read(e.path()).unwrap())
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = synth(dir.path());
+    let (a, b) = (dir.path().join("ta"), dir.path().join("tb"));
+    for out in [&a, &b] {
+        ok(&[
+            "dataset",
+            "tensors",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+    }
+    let (fa, fb) = (files(&a), files(&b));
+    assert_eq!(
+        fa.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        fb.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    assert!(fa == fb, "two runs wrote different bytes");
+    let names: Vec<&str> = fa.iter().map(|f| f.0.as_str()).collect();
+    assert!(names.contains(&"templates.safetensors"), "{names:?}");
+    assert!(names.contains(&"train-0000.safetensors"), "{names:?}");
+    assert!(names.contains(&"test_motion-0000.safetensors"), "{names:?}");
+    let m: Value = json(&a.join("manifest.json"));
+    assert_eq!(m["resolution"], 64);
+    assert_eq!(m["target"], "displacement");
+    assert_eq!(m["window"], 2);
+    let dim = m["condition_dim"].as_u64().unwrap();
+    let blocks = m["condition"].as_array().unwrap();
+    let sum: u64 = blocks.iter().map(|b| b["size"].as_u64().unwrap()).sum();
+    assert_eq!(sum, dim);
+    // 12 frames minus 4 of blend-in and settle: 8 motion frames per sequence.
+    assert_eq!(m["splits"]["train"]["frames"], 8);
+    assert_eq!(m["splits"]["test_motion"]["sequences"], 1);
+    assert_eq!(m["templates"].as_array().unwrap().len(), 1);
+    assert_eq!(
+        m["normalization"]["targets"]["std"]
+            .as_array()
+            .unwrap()
+            .len(),
+        3
+    );
+
+    let probe = std::process::Command::new("python3")
+        .args(["-c", "import safetensors, numpy"])
+        .status();
+    if probe.is_ok_and(|s| s.success()) {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/read_tensors.py");
+        let out = std::process::Command::new("python3")
+            .arg(script)
+            .arg(&a)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(j["train"]["targets"], serde_json::json!([8, 3, 64, 64]));
+        assert_eq!(j["train"]["conditions"], serde_json::json!([8, dim]));
+        assert_eq!(
+            j["templates"]["position_maps"],
+            serde_json::json!([1, 3, 64, 64])
+        );
+    } else {
+        eprintln!("skipped the Python check: python3 with safetensors and numpy not available");
+    }
+
+    // A damaged recording: the error names it, exit 1, nothing written.
+    let record: Value = serde_json::from_str(
+        std::fs::read_to_string(data.join("manifest.jsonl"))
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap(),
+    )
+    .unwrap();
+    let file = data.join(record["file"].as_str().unwrap());
+    let mut bytes = std::fs::read(&file).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x5a;
+    std::fs::write(&file, bytes).unwrap();
+    let c = dir.path().join("tc");
+    let out = run_with(
+        &[
+            "dataset",
+            "tensors",
+            data.to_str().unwrap(),
+            "--out",
+            c.to_str().unwrap(),
+        ],
+        &[],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(record["file"].as_str().unwrap()) && stderr.contains("checksum"),
+        "{stderr}"
+    );
+    assert!(!c.exists(), "a failed run wrote {}", c.display());
+}
