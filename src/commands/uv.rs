@@ -128,7 +128,13 @@ pub fn run(args: &UvArgs) -> Result<()> {
         "root": args.root,
     });
     if let Some(sequence) = &sequence {
-        let mut targets = Targets::new(&model, &template.positions, kind, removal)?;
+        let mut targets = Targets::new(
+            &model,
+            &template.positions,
+            &template.triangles,
+            kind,
+            removal,
+        )?;
         let floor = roundtrip_floor(&model, sequence, &image, &mut targets, args.every)?;
         let first = sequence.first_motion_frame();
         let frames: Vec<usize> = (0..TARGET_PICTURES)

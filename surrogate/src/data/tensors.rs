@@ -329,8 +329,13 @@ pub fn write_tensors(
                     .binary_search(&records[i].garment.as_str())
                     .unwrap_or(0);
                 let (template, image) = &templates[g];
-                let mut targets =
-                    Targets::new(model, &template.positions, options.target, options.root)?;
+                let mut targets = Targets::new(
+                    model,
+                    &template.positions,
+                    &template.triangles,
+                    options.target,
+                    options.root,
+                )?;
                 let motion = s.motion()?;
                 let mut out = Vec::new();
                 for k in (s.first_motion_frame()..s.len()).step_by(options.every.max(1)) {

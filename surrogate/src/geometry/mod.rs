@@ -11,5 +11,5 @@ mod target;
 pub use atlas::{Atlas, RESOLUTIONS, TexelSample};
 pub use canonical::{Canonical, RootRemoval};
 pub use maps::GeometryImage;
-pub use skinning::{FOLDED_JOINTS, Skinning};
+pub use skinning::{FOLDED_JOINTS, SMOOTHING_ROUNDS, Skinning};
 pub use target::{FrameBody, TargetKind, Targets};

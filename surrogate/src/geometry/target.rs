@@ -7,7 +7,7 @@ use motions::{BodyModel, FramePose, ShapedBody};
 use serde::{Deserialize, Serialize};
 
 use super::canonical::{Canonical, RootRemoval};
-use super::skinning::Skinning;
+use super::skinning::{SMOOTHING_ROUNDS, Skinning};
 use crate::error::Result;
 
 /// What a model predicts per vertex.
@@ -68,16 +68,20 @@ struct Base {
 }
 
 impl Targets {
-    /// Targets of `template` (rest positions on the template body) on `model`.
+    /// Targets of a template (rest positions on the template body, `triangles` over them)
+    /// on `model`.
     pub fn new(
         model: &BodyModel,
         template: &[[f64; 3]],
+        triangles: &[[u32; 3]],
         kind: TargetKind,
         removal: RootRemoval,
     ) -> Result<Self> {
         let skinning = match kind {
             TargetKind::Displacement => None,
-            TargetKind::LbsResidual => Some(Skinning::new(model, template)?),
+            TargetKind::LbsResidual => {
+                Some(Skinning::new(model, template, triangles, SMOOTHING_ROUNDS)?)
+            }
         };
         Ok(Self {
             kind,
@@ -174,7 +178,8 @@ mod tests {
             .map(|p| [p[0] + 0.3, p[1] + 0.02, p[2] - 0.9])
             .collect();
         for kind in [TargetKind::Displacement, TargetKind::LbsResidual] {
-            let mut targets = Targets::new(&model, &template, kind, RootRemoval::Heading).unwrap();
+            let mut targets =
+                Targets::new(&model, &template, &[], kind, RootRemoval::Heading).unwrap();
             let body = FrameBody {
                 pose: &frame,
                 betas: &betas,
