@@ -24,7 +24,9 @@ fn bench(c: &mut Criterion) {
     }
     let image = GeometryImage::new(n, &g.triangles, &g.uvs, &g.uv_triangles, 64).unwrap();
     let map = image.encode(&g.positions).unwrap();
-    group.bench_function("encode_64", |b| b.iter(|| image.encode(&g.positions).unwrap()));
+    group.bench_function("encode_64", |b| {
+        b.iter(|| image.encode(&g.positions).unwrap())
+    });
     group.bench_function("read_64", |b| b.iter(|| image.read(&map).unwrap()));
     group.bench_function("read_transpose_64", |b| {
         b.iter(|| image.read_transpose(&g.positions).unwrap())
