@@ -361,11 +361,7 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
 /// them).
 #[test]
 fn recording_reads_in_python() {
-    let probe = std::process::Command::new("python3")
-        .args(["-c", "import mcap, numpy"])
-        .status();
-    if !probe.is_ok_and(|s| s.success()) {
-        eprintln!("skipped: python3 with mcap and numpy not available");
+    if !common::python_has("mcap, numpy") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

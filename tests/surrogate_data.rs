@@ -186,10 +186,7 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
         3
     );
 
-    let probe = std::process::Command::new("python3")
-        .args(["-c", "import safetensors, numpy"])
-        .status();
-    if probe.is_ok_and(|s| s.success()) {
+    if common::python_has("safetensors, numpy") {
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/read_tensors.py");
         let out = std::process::Command::new("python3")
             .arg(script)
@@ -208,8 +205,6 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
             j["templates"]["position_maps"],
             serde_json::json!([1, 3, 64, 64])
         );
-    } else {
-        eprintln!("skipped the Python check: python3 with safetensors and numpy not available");
     }
 
     // A damaged recording: the error names it, exit 1, nothing written.

@@ -93,14 +93,8 @@ pub fn run(args: &UvArgs) -> Result<()> {
         };
         (t, None)
     };
-    let image = GeometryImage::new(
-        template.positions.len(),
-        &template.triangles,
-        &template.uvs,
-        &template.uv_triangles,
-        args.resolution,
-    )
-    .with_context(|| format!("{}: geometry image", args.source))?;
+    let image = GeometryImage::of_template(&template, args.resolution)
+        .with_context(|| format!("{}: geometry image", args.source))?;
     let r = args.resolution;
     let atlas = image.atlas();
     std::fs::create_dir_all(&args.out)

@@ -59,3 +59,21 @@ pub fn fails(args: &[&str]) -> String {
 pub fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
+
+/// Whether `python3` can import `modules` (comma-separated). Where it cannot, the caller skips
+/// its Python check, unless `DIT_GARMENT_REQUIRE_PYTHON` is set (`.ci/run` sets it after
+/// installing the packages), which makes a missing package a failure instead of a skip.
+pub fn python_has(modules: &str) -> bool {
+    let found = std::process::Command::new("python3")
+        .args(["-c", &format!("import {modules}")])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !found {
+        assert!(
+            std::env::var_os("DIT_GARMENT_REQUIRE_PYTHON").is_none(),
+            "python3 cannot import {modules}, and DIT_GARMENT_REQUIRE_PYTHON is set"
+        );
+        eprintln!("skipped: python3 with {modules} not available");
+    }
+    found
+}

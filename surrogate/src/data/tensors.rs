@@ -293,14 +293,8 @@ pub fn write_tensors(
             Some(_) => {}
             None => {
                 let t = &s.template;
-                let image = GeometryImage::new(
-                    t.positions.len(),
-                    &t.triangles,
-                    &t.uvs,
-                    &t.uv_triangles,
-                    options.resolution,
-                )
-                .map_err(|e| file_error(path, e))?;
+                let image = GeometryImage::of_template(t, options.resolution)
+                    .map_err(|e| file_error(path, e))?;
                 templates[g] = Some((t.clone(), image));
             }
         }

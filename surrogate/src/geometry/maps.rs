@@ -6,6 +6,8 @@
 //!
 //! Images are channels-last `[f64; 3]` per texel, texel `j * R + i` (see `atlas.rs`).
 
+use sim::recording::TemplateArrays;
+
 use super::atlas::Atlas;
 use crate::error::{Error, Result};
 
@@ -125,6 +127,17 @@ impl GeometryImage {
             entries,
             read,
         })
+    }
+
+    /// The geometry image of a recorded template.
+    pub fn of_template(template: &TemplateArrays, resolution: usize) -> Result<Self> {
+        Self::new(
+            template.positions.len(),
+            &template.triangles,
+            &template.uvs,
+            &template.uv_triangles,
+            resolution,
+        )
     }
 
     /// The atlas.
