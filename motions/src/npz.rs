@@ -102,6 +102,8 @@ impl<R: Read + Seek> Npz<R> {
             return Err(bad_array(&path, key, "structured arrays are not supported"));
         };
         let size = ts.size_field();
+        // NumPy writes `np.asfortranarray` data column-major; it is reordered below.
+        let fortran = file.order() == npyz::Order::Fortran;
         let io = |e: std::io::Error| Error::BadArray {
             path: path.clone(),
             key: key.to_string(),
@@ -143,6 +145,11 @@ impl<R: Read + Seek> Npz<R> {
         if data.len() != expected {
             return Err(bad_array(&path, key, "truncated array data"));
         }
+        let data = if fortran {
+            fortran_to_c(&shape, &data)
+        } else {
+            data
+        };
         Ok(Some(Array { shape, data }))
     }
 
@@ -246,4 +253,34 @@ fn to_f64<T: Copy + TryInto<i128>>(v: Vec<T>) -> Vec<f64> {
     v.into_iter()
         .map(|x| x.try_into().map_or(f64::NAN, |i: i128| i as f64))
         .collect()
+}
+
+/// Values stored column-major (Fortran order: the first index fastest) in row-major (C) order.
+fn fortran_to_c(shape: &[usize], data: &[f64]) -> Vec<f64> {
+    let mut strides = Vec::with_capacity(shape.len());
+    let mut stride = 1;
+    for &d in shape {
+        strides.push(stride);
+        stride *= d;
+    }
+    let mut index = vec![0usize; shape.len()];
+    let mut out = Vec::with_capacity(data.len());
+    for _ in 0..data.len() {
+        out.push(
+            data[index
+                .iter()
+                .zip(&strides)
+                .map(|(i, s)| i * s)
+                .sum::<usize>()],
+        );
+        // Next C-order index: the last axis fastest.
+        for axis in (0..shape.len()).rev() {
+            index[axis] += 1;
+            if index[axis] < shape[axis] {
+                break;
+            }
+            index[axis] = 0;
+        }
+    }
+    out
 }

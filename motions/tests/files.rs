@@ -274,3 +274,45 @@ fn model_file_round_trip_and_errors() {
             .contains("garbage.npz")
     );
 }
+
+/// Issue 27, item 4: a Fortran-order array (`np.asfortranarray`) was read as C order. Written
+/// column-major, it must read back in C order: the 2 x 3 x 2 array a[i][j][k] = 100 i + 10 j + k.
+#[test]
+fn fortran_order_arrays_read_in_c_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fortran.npz");
+    let value = |i: usize, j: usize, k: usize| (100 * i + 10 * j + k) as f64;
+    // Column-major: the first index fastest.
+    let mut column_major = Vec::new();
+    for k in 0..2 {
+        for j in 0..3 {
+            for i in 0..2 {
+                column_major.push(value(i, j, k));
+            }
+        }
+    }
+    {
+        let mut npz = NpzWriter::create(&path).unwrap();
+        npz.array::<f64>("a", Default::default())
+            .unwrap()
+            .default_dtype()
+            .order(npyz::Order::Fortran)
+            .shape(&[2, 3, 2])
+            .begin_nd()
+            .unwrap()
+            .extend(column_major.iter().copied())
+            .unwrap();
+    }
+    let mut npz = motions::npz::Npz::open(&path).unwrap();
+    let a = npz.numeric("a").unwrap().unwrap();
+    assert_eq!(a.shape, vec![2, 3, 2]);
+    let mut expected = Vec::new();
+    for i in 0..2 {
+        for j in 0..3 {
+            for k in 0..2 {
+                expected.push(value(i, j, k));
+            }
+        }
+    }
+    assert_eq!(a.data, expected, "read as {:?}", a.data);
+}
