@@ -374,18 +374,7 @@ fn recording_reads_in_python() {
         seq.to_str().unwrap(),
         "--quiet",
     ]);
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/read_recording.py");
-    let out = std::process::Command::new("python3")
-        .arg(script)
-        .arg(&seq)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let j = common::python_tool("read_recording.py", &seq);
     assert_eq!(j["frames"], 4);
     assert_eq!(j["pose_dim"], 72);
 }

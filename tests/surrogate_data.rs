@@ -187,18 +187,7 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     );
 
     if common::python_has("safetensors, numpy") {
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/read_tensors.py");
-        let out = std::process::Command::new("python3")
-            .arg(script)
-            .arg(&a)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+        let j = common::python_tool("read_tensors.py", &a);
         assert_eq!(j["train"]["targets"], serde_json::json!([8, 3, 64, 64]));
         assert_eq!(j["train"]["conditions"], serde_json::json!([8, dim]));
         assert_eq!(

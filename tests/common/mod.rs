@@ -77,3 +77,21 @@ pub fn python_has(modules: &str) -> bool {
     }
     found
 }
+
+/// Runs one of `tools/*.py` on `arg`, asserts success and parses the JSON it prints.
+pub fn python_tool(script: &str, arg: &Path) -> Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tools")
+        .join(script);
+    let out = Command::new("python3")
+        .arg(script)
+        .arg(arg)
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("the tool prints JSON")
+}

@@ -31,12 +31,21 @@ const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 impl Recording {
     /// Reads a whole recording; truncated or foreign files get an error naming the file.
     pub fn read(path: &Path) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::Recording {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_bytes(&bytes, path)
+    }
+
+    /// Parses a recording already in memory (a caller that also checksums the file reads it
+    /// once); `path` names it in errors.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self> {
         let name = path.display().to_string();
         let fail = |message: String| Error::Recording {
             path: name.clone(),
             message,
         };
-        let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
         if !bytes.starts_with(MAGIC) {
             return Err(fail("not an MCAP file (no MCAP magic at the start)".into()));
         }
@@ -46,7 +55,7 @@ impl Recording {
             ));
         }
         let mut r = Recording::default();
-        let stream = mcap::MessageStream::new(&bytes).map_err(|e| fail(e.to_string()))?;
+        let stream = mcap::MessageStream::new(bytes).map_err(|e| fail(e.to_string()))?;
         for message in stream {
             let m = message.map_err(|e| fail(e.to_string()))?;
             let data = &m.data;

@@ -29,12 +29,16 @@ pub struct Sequence {
 impl Sequence {
     /// Reads a garment recording; a missing, damaged or foreign file is an error naming it.
     pub fn read(path: &Path) -> Result<Self> {
+        Self::from_recording(Recording::read(path)?, path)
+    }
+
+    /// A sequence from a recording already read; `path` names it in errors.
+    pub fn from_recording(r: Recording, path: &Path) -> Result<Self> {
         let name = path.display().to_string();
         let fail = |problem: String| Error::File {
             path: name.clone(),
             problem,
         };
-        let r = Recording::read(path)?;
         let meta = r
             .meta
             .ok_or_else(|| fail("the recording has no metadata".into()))?;

@@ -13,7 +13,7 @@ use safetensors::tensor::{Dtype, TensorView};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use sim::dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
-use sim::recording::TemplateArrays;
+use sim::recording::{Recording, TemplateArrays};
 
 use super::conditions::{Block, ConditionLayout};
 use super::sequence::Sequence;
@@ -215,8 +215,9 @@ fn stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
     Stats { mean, std }
 }
 
-/// The dataset's finished sequences, checked against their checksums.
-fn finished(dir: &Path) -> Result<Vec<ManifestRecord>> {
+/// The dataset's finished sequences, each read once: checked against its manifest checksum,
+/// then parsed.
+fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
     let path = dir.join("manifest.jsonl");
     let text = std::fs::read_to_string(&path).map_err(|e| file_error(&path, e))?;
     let mut records = Vec::new();
@@ -227,26 +228,31 @@ fn finished(dir: &Path) -> Result<Vec<ManifestRecord>> {
     {
         let r: ManifestRecord = serde_json::from_str(line)
             .map_err(|e| file_error(&path, format!("line {}: {e}", i + 1)))?;
-        if !r.ok() {
-            continue;
+        if r.ok() {
+            records.push(r);
         }
-        let (Some(file), Some(sha)) = (&r.file, &r.sha256) else {
-            return Err(file_error(
-                &path,
-                format!("sequence {} has no recording", r.id),
-            ));
-        };
-        let seq = dir.join(file);
-        let bytes = std::fs::read(&seq).map_err(|e| file_error(&seq, e))?;
-        if &hex(&Sha256::digest(&bytes)) != sha {
-            return Err(file_error(
-                &seq,
-                "does not match the manifest's checksum (damaged or replaced)",
-            ));
-        }
-        records.push(r);
     }
-    Ok(records)
+    records
+        .into_par_iter()
+        .map(|r| {
+            let (Some(file), Some(sha)) = (&r.file, &r.sha256) else {
+                return Err(file_error(
+                    &path,
+                    format!("sequence {} has no recording", r.id),
+                ));
+            };
+            let seq = dir.join(file);
+            let bytes = std::fs::read(&seq).map_err(|e| file_error(&seq, e))?;
+            if &hex(&Sha256::digest(&bytes)) != sha {
+                return Err(file_error(
+                    &seq,
+                    "does not match the manifest's checksum (damaged or replaced)",
+                ));
+            }
+            let sequence = Sequence::from_recording(Recording::from_bytes(&bytes, &seq)?, &seq)?;
+            Ok((r, seq, sequence))
+        })
+        .collect()
 }
 
 /// Turns the dataset in `dir` into tensors in `out`; `progress` is called once per sequence.
@@ -258,7 +264,10 @@ pub fn write_tensors(
     progress: impl Fn() + Sync,
 ) -> Result<TensorManifest> {
     let spec = DatasetSpec::load(&dir.join("spec.toml"))?;
-    let records = finished(dir)?;
+    let (records, sequences): (Vec<ManifestRecord>, Vec<(PathBuf, Sequence)>) = finished(dir)?
+        .into_iter()
+        .map(|(r, path, s)| (r, (path, s)))
+        .unzip();
     let layout = ConditionLayout {
         betas: model.num_betas(),
         window: options.window,
@@ -268,13 +277,6 @@ pub fn write_tensors(
     let mut names: Vec<&str> = records.iter().map(|r| r.garment.as_str()).collect();
     names.sort_unstable();
     names.dedup();
-    let sequences: Vec<(PathBuf, Sequence)> = records
-        .par_iter()
-        .map(|r| {
-            let path = dir.join(r.file.as_deref().unwrap_or_default());
-            Sequence::read(&path).map(|s| (path, s))
-        })
-        .collect::<Result<_>>()?;
     let mut templates: Vec<Option<(TemplateArrays, GeometryImage)>> = vec![None; names.len()];
     for ((path, s), r) in sequences.iter().zip(&records) {
         let g = names.binary_search(&r.garment.as_str()).unwrap_or(0);
@@ -300,6 +302,7 @@ pub fn write_tensors(
         }
     }
     let templates: Vec<(TemplateArrays, GeometryImage)> = templates.into_iter().flatten().collect();
+    let loss_masks: Vec<Vec<bool>> = templates.iter().map(|(_, i)| i.loss_mask()).collect();
     std::fs::create_dir_all(out).map_err(|e| file_error(out, e))?;
     let r = options.resolution;
     let mut manifest_splits = BTreeMap::new();
@@ -352,7 +355,7 @@ pub fn write_tensors(
         if split == "train" {
             for f in &frames {
                 train_templates[f.template] = true;
-                let mask = templates[f.template].1.loss_mask();
+                let mask = &loss_masks[f.template];
                 for c in 0..3 {
                     for (k, &m) in mask.iter().enumerate() {
                         if m {
@@ -445,7 +448,7 @@ pub fn write_tensors(
     for (i, (t, image)) in templates.iter().enumerate() {
         let map = image.encode(&t.positions).map_err(|e| file_error(out, e))?;
         positions.extend(channels_first(&map));
-        masks.extend(image.loss_mask().iter().map(|&m| m as u8 as f32));
+        masks.extend(loss_masks[i].iter().map(|&m| m as u8 as f32));
         inside.extend(image.atlas().inside().iter().map(|&m| m as u8 as f32));
         if train_templates[i] {
             for (p, _) in map.iter().zip(image.atlas().inside()).filter(|(_, m)| **m) {

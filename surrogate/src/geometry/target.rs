@@ -61,10 +61,11 @@ pub struct Targets {
     shaped: Option<ShapedBody>,
 }
 
-/// The base a target is measured from, and the frame's canonical map.
+/// The frame's canonical map and, for `lbs_residual`, the skinned template the target is
+/// measured from (`displacement` measures from the rest template itself, not copied).
 struct Base {
     canonical: Canonical,
-    points: Vec<[f64; 3]>,
+    skinned: Option<Vec<[f64; 3]>>,
 }
 
 impl Targets {
@@ -108,15 +109,14 @@ impl Targets {
         let pelvis = [j0[0] + t[0], j0[1] + t[1], j0[2] + t[2]];
         let p = &body.pose.pose;
         let canonical = Canonical::new(self.removal, [p[0], p[1], p[2]], pelvis, self.rest_pelvis);
-        let points = match &self.skinning {
-            None => self.template.clone(),
-            Some(skinning) => skinning
+        let skinned = self.skinning.as_ref().map(|skinning| {
+            skinning
                 .pose(model, shaped, body.pose)
                 .into_iter()
                 .map(|q| canonical.to_canonical(q))
-                .collect(),
-        };
-        Ok(Base { canonical, points })
+                .collect()
+        });
+        Ok(Base { canonical, skinned })
     }
 
     /// The per-vertex target of a frame whose cloth is at `garment` (world, m).
@@ -129,7 +129,7 @@ impl Targets {
         let base = self.base(model, body)?;
         Ok(garment
             .iter()
-            .zip(&base.points)
+            .zip(base.skinned.as_deref().unwrap_or(&self.template))
             .map(|(x, b)| {
                 let c = base.canonical.to_canonical(*x);
                 [c[0] - b[0], c[1] - b[1], c[2] - b[2]]
@@ -147,7 +147,7 @@ impl Targets {
         let base = self.base(model, body)?;
         Ok(target
             .iter()
-            .zip(&base.points)
+            .zip(base.skinned.as_deref().unwrap_or(&self.template))
             .map(|(d, b)| {
                 base.canonical
                     .to_world([b[0] + d[0], b[1] + d[1], b[2] + d[2]])
