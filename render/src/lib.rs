@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 mod camera;
+mod chart;
 mod colour;
 mod raster;
 mod sheet;
@@ -15,6 +16,7 @@ mod texels;
 pub mod viewer;
 
 pub use camera::{Bounds, Camera, View};
+pub use chart::{Series, log_line_chart};
 pub use colour::{ColourScale, draw_colour_bar, draw_text};
 pub use image::RgbImage;
 pub use raster::{Layer, Renderer, Style};

@@ -155,23 +155,12 @@ impl SceneConfig {
 
     /// Parses a configuration over the defaults; `source` names it in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<Self> {
-        let fail = |message: String| Error::Config {
-            path: source.to_string(),
-            message,
-        };
-        let file: toml::Table = toml::from_str(text).map_err(|e| fail(e.to_string()))?;
-        let known = toml::Table::try_from(Self::every_key()).map_err(|e| fail(e.to_string()))?;
-        if let Some(key) = unknown_key(&file, &known, "") {
-            return Err(fail(format!(
-                "unknown key '{key}' (print the known keys with `--print-config`)"
-            )));
-        }
-        let mut merged = toml::Table::try_from(Self::default()).map_err(|e| fail(e.to_string()))?;
-        merge(&mut merged, file);
-        let config: Self = toml::Value::Table(merged)
-            .try_into()
-            .map_err(|e: toml::de::Error| fail(e.message().to_string()))?;
-        Ok(config)
+        toml_over_defaults(text, &Self::default(), &Self::every_key()).map_err(|message| {
+            Error::Config {
+                path: source.to_string(),
+                message,
+            }
+        })
     }
 
     /// A configuration with every optional key present, to list the known keys.
@@ -183,6 +172,29 @@ impl SceneConfig {
             ..Self::default()
         }
     }
+}
+
+/// Parses TOML `text` laid over `defaults`: keys the text leaves out keep their default
+/// values; a key that `every_key` (the type with every optional key present) lacks is an error
+/// naming its dotted path, as is a value of the wrong type. Shared by every configuration
+/// file of the project (scenes here, the surrogate's model and training).
+pub fn toml_over_defaults<T: Serialize + serde::de::DeserializeOwned>(
+    text: &str,
+    defaults: &T,
+    every_key: &T,
+) -> std::result::Result<T, String> {
+    let file: toml::Table = toml::from_str(text).map_err(|e| e.to_string())?;
+    let known = toml::Table::try_from(every_key).map_err(|e| e.to_string())?;
+    if let Some(key) = unknown_key(&file, &known, "") {
+        return Err(format!(
+            "unknown key '{key}' (print the known keys with `--print-config`)"
+        ));
+    }
+    let mut merged = toml::Table::try_from(defaults).map_err(|e| e.to_string())?;
+    merge(&mut merged, file);
+    toml::Value::Table(merged)
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_string())
 }
 
 /// The first key of `file` (dotted path) that `known` does not have; arrays and values are

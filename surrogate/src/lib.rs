@@ -10,5 +10,6 @@
 pub mod data;
 mod error;
 pub mod geometry;
+pub mod model;
 
 pub use error::{Error, Result};

@@ -3,10 +3,12 @@
 //! (`tensors.rs`).
 
 mod conditions;
+mod frames;
 mod sequence;
 mod tensors;
 
 pub use conditions::{Block, CONDITION_JOINTS, ConditionLayout};
+pub use frames::{Frames, TrainingTensors};
 pub use sequence::{Floor, Sequence, roundtrip_floor};
 pub use tensors::{
     Normalization, ShardInfo, SplitInfo, Stats, TemplateInfo, TensorManifest, TensorOptions,

@@ -1,0 +1,136 @@
+//! The model's configuration: one plain struct, saved as TOML beside every checkpoint and
+//! checked on load, so weights are never read into a network of another shape.
+
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::TargetKind;
+
+/// Channels of the network's input image: noisy target (3), position map (3), mask (1).
+pub const INPUT_CHANNELS: usize = 7;
+/// Channels of its output: the velocity of the target map.
+pub const OUTPUT_CHANNELS: usize = 3;
+/// Width of the sinusoidal timestep features (Sana's and DiT's 256).
+pub const FREQUENCY_DIM: usize = 256;
+
+/// How the Mix-FFN's 3 x 3 depthwise convolution is computed (same function, two speeds on
+/// the CPU: burn's grouped `Conv2d` backward runs one small convolution per channel).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Depthwise {
+    /// Nine shifted multiply-adds over the padded token grid.
+    Shifted,
+    /// burn's `Conv2d` with one group per channel.
+    Conv2d,
+}
+
+/// A Sana-style DiT over UV geometry images (docs/SURROGATE.md, "The model").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DitConfig {
+    /// Texels per side of the geometry images (32, 64 or 128).
+    pub resolution: usize,
+    /// Texels per side of one token (1, 2 or 4).
+    pub patch: usize,
+    /// Token width C.
+    pub width: usize,
+    /// Transformer blocks.
+    pub depth: usize,
+    /// Attention heads (self- and cross-attention); `width` must divide by it.
+    pub heads: usize,
+    /// Mix-FFN hidden width over `width`.
+    pub mlp_ratio: f64,
+    /// Condition tokens the condition MLP makes for cross-attention.
+    pub condition_tokens: usize,
+    /// Length of the condition vector (the training tensors' `condition_dim`).
+    pub condition_dim: usize,
+    /// What the target maps hold (the training tensors' `target`).
+    pub target: TargetKind,
+    /// How the depthwise convolution is computed.
+    pub depthwise: Depthwise,
+}
+
+impl Default for DitConfig {
+    fn default() -> Self {
+        Self {
+            resolution: 64,
+            patch: 2,
+            width: 128,
+            depth: 4,
+            heads: 4,
+            mlp_ratio: 2.5,
+            condition_tokens: 8,
+            condition_dim: 415,
+            target: TargetKind::LbsResidual,
+            depthwise: Depthwise::Shifted,
+        }
+    }
+}
+
+impl DitConfig {
+    /// Names the first bad value (`key = value: what is expected`).
+    pub fn validate(&self) -> Result<(), String> {
+        let bad = |key: &str, value: &dyn std::fmt::Display, expected: &str| {
+            Err(format!("model.{key} = {value}: {expected}"))
+        };
+        if ![32, 64, 128].contains(&self.resolution) {
+            return bad("resolution", &self.resolution, "must be 32, 64 or 128");
+        }
+        if ![1, 2, 4].contains(&self.patch) {
+            return bad("patch", &self.patch, "must be 1, 2 or 4");
+        }
+        if self.width == 0 || self.width > 4096 {
+            return bad("width", &self.width, "must be 1 to 4096");
+        }
+        if self.depth == 0 || self.depth > 64 {
+            return bad("depth", &self.depth, "must be 1 to 64");
+        }
+        if self.heads == 0 || self.width % self.heads != 0 {
+            return bad("heads", &self.heads, "must divide the width");
+        }
+        if !(self.mlp_ratio.is_finite() && self.mlp_ratio > 0.0 && self.mlp_ratio <= 16.0) {
+            return bad("mlp_ratio", &self.mlp_ratio, "must be in (0, 16]");
+        }
+        if self.condition_tokens == 0 || self.condition_tokens > 256 {
+            return bad(
+                "condition_tokens",
+                &self.condition_tokens,
+                "must be 1 to 256",
+            );
+        }
+        if self.condition_dim == 0 || self.condition_dim > 1 << 16 {
+            return bad("condition_dim", &self.condition_dim, "must be 1 to 65536");
+        }
+        Ok(())
+    }
+
+    /// Tokens per side of the token grid.
+    pub fn grid(&self) -> usize {
+        self.resolution / self.patch
+    }
+
+    /// Mix-FFN hidden width H (the depthwise convolution runs over 2H channels).
+    pub fn hidden(&self) -> usize {
+        ((self.width as f64 * self.mlp_ratio).round() as usize).max(1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_values_are_named() {
+        let mut c = DitConfig::default();
+        assert!(c.validate().is_ok());
+        c.heads = 3;
+        assert_eq!(
+            c.validate().unwrap_err(),
+            "model.heads = 3: must divide the width"
+        );
+        c = DitConfig {
+            patch: 3,
+            ..DitConfig::default()
+        };
+        assert!(c.validate().unwrap_err().starts_with("model.patch = 3"));
+    }
+}

@@ -1,0 +1,270 @@
+//! The pieces of a Sana block: ReLU linear attention, cross-attention to condition tokens, the
+//! Mix-FFN with its 3 x 3 depthwise convolution, an affine-free layer norm and the timestep's
+//! sinusoidal features. Shapes: B batch, N tokens, C width, T condition tokens.
+
+use burn::module::{Initializer, Param};
+use burn::nn::{Linear, LinearConfig};
+use burn::prelude::*;
+use burn::tensor::activation::{relu, silu, softmax};
+use burn::tensor::module::conv2d;
+use burn::tensor::ops::{ConvOptions, PadMode};
+
+use super::config::{Depthwise, FREQUENCY_DIM};
+
+/// Added to the linear attention's denominator (Sana's fp32 value).
+pub const ATTENTION_EPS: f32 = 1e-8;
+/// Layer norm's variance floor (Sana's and DiT's 1e-6).
+pub const NORM_EPS: f32 = 1e-6;
+
+/// Layer norm over the last dimension with no learnable scale or shift: adaLN supplies both.
+pub fn norm(x: Tensor<3>) -> Tensor<3> {
+    let mean = x.clone().mean_dim(2);
+    let centred = x - mean;
+    let var = centred.clone().square().mean_dim(2);
+    centred / (var + NORM_EPS).sqrt()
+}
+
+/// Sinusoidal features of `s * 1000` for rectified-flow time `s` in [0, 1]: `[B] -> [B, 256]`
+/// (cosines, then sines, DiT's order).
+pub fn timestep_features(s: Tensor<1>) -> Tensor<2> {
+    let half = FREQUENCY_DIM / 2;
+    let device = s.device();
+    let freqs: Vec<f32> = (0..half)
+        .map(|i| (-(10000f64.ln()) * i as f64 / half as f64).exp() as f32)
+        .collect();
+    let freqs = Tensor::<1>::from_data(freqs.as_slice(), &device).unsqueeze::<2>();
+    let args = s.mul_scalar(1000.0).unsqueeze_dim::<2>(1) * freqs;
+    Tensor::cat(vec![args.clone().cos(), args.sin()], 1)
+}
+
+/// Splits `[B, L, parts * H * d]` into `parts` tensors `[B, H, L, d]`.
+fn heads(x: Tensor<3>, parts: usize, h: usize) -> Vec<Tensor<4>> {
+    let [b, l, width] = x.dims();
+    let d = width / parts / h;
+    let x = x.reshape([b, l, parts, h, d]);
+    (0..parts)
+        .map(|i| {
+            x.clone()
+                .slice(s![.., .., i..i + 1, .., ..])
+                .reshape([b, l, h, d])
+                .swap_dims(1, 2)
+        })
+        .collect()
+}
+
+/// `[B, H, L, d] -> [B, L, H * d]`.
+fn merge_heads(x: Tensor<4>) -> Tensor<3> {
+    let [b, h, l, d] = x.dims();
+    x.swap_dims(1, 2).reshape([b, l, h * d])
+}
+
+/// Sana's ReLU linear attention: cost linear in the token count.
+#[derive(Module, Debug)]
+pub struct LinearAttention {
+    /// `C -> 3C`, no bias.
+    pub qkv: Linear,
+    /// `C -> C`.
+    pub proj: Linear,
+    /// Heads.
+    pub heads: usize,
+}
+
+impl LinearAttention {
+    /// A new attention of `width` over `heads` heads.
+    pub fn new(width: usize, heads: usize, device: &Device) -> Self {
+        Self {
+            qkv: LinearConfig::new(width, 3 * width)
+                .with_bias(false)
+                .init(device),
+            proj: LinearConfig::new(width, width).init(device),
+            heads,
+        }
+    }
+
+    /// `[B, N, C] -> [B, N, C]`: o_n = (sum_m v_m phi(k_m)^T) phi(q_n) / (sum_m phi(k_m)^T
+    /// phi(q_n) + eps), phi = ReLU, no 1/sqrt(d) scale.
+    pub fn forward(&self, x: Tensor<3>) -> Tensor<3> {
+        let mut qkv = heads(self.qkv.forward(x), 3, self.heads).into_iter();
+        let (q, k, v) = (
+            relu(qkv.next().expect("q")),
+            relu(qkv.next().expect("k")),
+            qkv.next().expect("v"),
+        );
+        let kv = k.clone().swap_dims(2, 3).matmul(v); // [B, H, d, d]
+        let numerator = q.clone().matmul(kv); // [B, H, N, d]
+        let denominator = q.matmul(k.sum_dim(2).swap_dims(2, 3)); // [B, H, N, 1]
+        self.proj
+            .forward(merge_heads(numerator / (denominator + ATTENTION_EPS)))
+    }
+}
+
+/// Multi-head softmax attention from the tokens to the condition tokens.
+#[derive(Module, Debug)]
+pub struct CrossAttention {
+    /// Queries from the tokens, `C -> C`.
+    pub q: Linear,
+    /// Keys and values from the condition tokens, `C -> 2C`.
+    pub kv: Linear,
+    /// `C -> C`.
+    pub proj: Linear,
+    /// Heads.
+    pub heads: usize,
+}
+
+impl CrossAttention {
+    /// A new cross-attention of `width` over `heads` heads.
+    pub fn new(width: usize, heads: usize, device: &Device) -> Self {
+        Self {
+            q: LinearConfig::new(width, width).init(device),
+            kv: LinearConfig::new(width, 2 * width).init(device),
+            proj: LinearConfig::new(width, width).init(device),
+            heads,
+        }
+    }
+
+    /// Tokens `[B, N, C]`, condition tokens `[B, T, C]` -> `[B, N, C]`.
+    pub fn forward(&self, x: Tensor<3>, condition: Tensor<3>) -> Tensor<3> {
+        let q = heads(self.q.forward(x), 1, self.heads).remove(0); // [B, H, N, d]
+        let d = q.dims()[3];
+        let mut kv = heads(self.kv.forward(condition), 2, self.heads).into_iter();
+        let (k, v) = (kv.next().expect("k"), kv.next().expect("v")); // [B, H, T, d]
+        let logits = q.matmul(k.swap_dims(2, 3)).div_scalar((d as f32).sqrt()); // [B, H, N, T]
+        self.proj.forward(merge_heads(softmax(logits, 3).matmul(v)))
+    }
+}
+
+/// A 3 x 3 depthwise convolution with zero padding: weight `[K, 1, 3, 3]` (PyTorch's layout
+/// for `groups = K`) and bias `[K]`.
+#[derive(Module, Debug)]
+pub struct DepthwiseConv {
+    /// `[K, 1, 3, 3]`.
+    pub weight: Param<Tensor<4>>,
+    /// `[K]`.
+    pub bias: Param<Tensor<1>>,
+}
+
+impl DepthwiseConv {
+    /// A new convolution over `channels`, initialized like PyTorch's (uniform in +-1/3:
+    /// fan-in 9).
+    pub fn new(channels: usize, device: &Device) -> Self {
+        let bound = 1.0 / 3.0;
+        let uniform = Initializer::Uniform {
+            min: -bound,
+            max: bound,
+        };
+        Self {
+            weight: uniform.init([channels, 1, 3, 3], device),
+            bias: uniform.init([channels], device),
+        }
+    }
+
+    /// `[B, K, G, G] -> [B, K, G, G]`, computed as `how` says (the same function).
+    pub fn forward(&self, x: Tensor<4>, how: Depthwise) -> Tensor<4> {
+        let [_, k, h, w] = x.dims();
+        match how {
+            Depthwise::Conv2d => conv2d(
+                x,
+                self.weight.val(),
+                Some(self.bias.val()),
+                ConvOptions::new([1, 1], [1, 1], [1, 1], k),
+            ),
+            Depthwise::Shifted => {
+                let padded = x.pad((1, 1, 1, 1), PadMode::Constant(0.0));
+                let weight = self.weight.val();
+                let mut out = self.bias.val().reshape([1, k, 1, 1]);
+                for ky in 0..3 {
+                    for kx in 0..3 {
+                        let tap = weight
+                            .clone()
+                            .slice(s![.., .., ky..ky + 1, kx..kx + 1])
+                            .reshape([1, k, 1, 1]);
+                        let shifted = padded.clone().slice(s![.., .., ky..ky + h, kx..kx + w]);
+                        out = out + shifted * tap;
+                    }
+                }
+                out
+            }
+        }
+    }
+}
+
+/// Sana's Mix-FFN (GLUMBConv): 1 x 1 `C -> 2H` + SiLU, 3 x 3 depthwise over the token grid,
+/// split into (x, gate), x * SiLU(gate), 1 x 1 `H -> C`.
+#[derive(Module, Debug)]
+pub struct MixFfn {
+    /// `C -> 2H`.
+    pub inverted: Linear,
+    /// Over the 2H channels.
+    pub depthwise: DepthwiseConv,
+    /// `H -> C`.
+    pub point: Linear,
+    /// How the depthwise convolution is computed.
+    #[module(skip)]
+    pub how: Depthwise,
+}
+
+impl MixFfn {
+    /// A new Mix-FFN of `width` with hidden width `hidden`.
+    pub fn new(width: usize, hidden: usize, how: Depthwise, device: &Device) -> Self {
+        Self {
+            inverted: LinearConfig::new(width, 2 * hidden).init(device),
+            depthwise: DepthwiseConv::new(2 * hidden, device),
+            point: LinearConfig::new(hidden, width).init(device),
+            how,
+        }
+    }
+
+    /// `[B, N, C] -> [B, N, C]`, tokens in row-major order of a square `G x G` grid.
+    pub fn forward(&self, x: Tensor<3>) -> Tensor<3> {
+        let [b, n, _] = x.dims();
+        let g = (n as f64).sqrt().round() as usize;
+        let y = silu(self.inverted.forward(x)); // [B, N, 2H]
+        let k = y.dims()[2];
+        let grid = y.swap_dims(1, 2).reshape([b, k, g, g]);
+        let y = self
+            .depthwise
+            .forward(grid, self.how)
+            .reshape([b, k, n])
+            .swap_dims(1, 2);
+        let hidden = k / 2;
+        let value = y.clone().slice(s![.., .., 0..hidden]);
+        let gate = y.slice(s![.., .., hidden..k]);
+        self.point.forward(value * silu(gate))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::tensor::Distribution;
+
+    fn values(t: Tensor<4>) -> Vec<f32> {
+        t.try_into_vec_as::<f32>().expect("f32 values")
+    }
+
+    #[test]
+    fn shifted_depthwise_equals_conv2d() {
+        let device = Device::flex();
+        device.seed(3);
+        let conv = DepthwiseConv::new(5, &device);
+        let x = Tensor::<4>::random([2, 5, 6, 6], Distribution::Normal(0.0, 1.0), &device);
+        let a = values(conv.forward(x.clone(), Depthwise::Shifted));
+        let b = values(conv.forward(x, Depthwise::Conv2d));
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max);
+        assert!(worst < 1e-5, "largest difference {worst}");
+    }
+
+    #[test]
+    fn the_norm_has_zero_mean_and_unit_variance() {
+        let device = Device::flex();
+        let x = Tensor::<3>::from_data([[[1.0f32, 2.0, 3.0, 6.0]]], &device);
+        let y: Vec<f32> = norm(x).try_into_vec_as::<f32>().unwrap();
+        let mean = y.iter().sum::<f32>() / 4.0;
+        let var = y.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / 4.0;
+        assert!(mean.abs() < 1e-6 && (var - 1.0).abs() < 1e-4, "{y:?}");
+    }
+}
