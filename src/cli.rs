@@ -62,6 +62,49 @@ pub enum Command {
     /// The surrogate's UV geometry images of a template or a recording: position map, mask,
     /// target maps and (for a recording) the round-trip floor, the best any UV model can do.
     Uv(UvArgs),
+    /// Train the surrogate (DiT-Garment, rectified flow) on training tensors (`dataset
+    /// tensors` output): checkpoints, resume, loss curves, EMA weights as safetensors.
+    Train(TrainArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Training tensors folder (`dataset tensors --out`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Run folder: `config.toml`, `log.jsonl`, `loss.png`, `checkpoint-<step>/`,
+    /// `model.safetensors`, `reference.safetensors`, `summary.json`.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Run configuration (TOML, `[model]` and `[training]` tables) over the defaults; see
+    /// `--print-config`. With `--resume`, the run's own `config.toml` is the default.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Optimizer steps of the whole run (`training.steps`).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Stop after this many minutes (at the next log line, with a checkpoint); `--resume`
+    /// continues.
+    #[arg(long)]
+    pub minutes: Option<f64>,
+    /// Frames per step (`training.batch`).
+    #[arg(long)]
+    pub batch: Option<usize>,
+    /// Seed of the weights, batches and noise (`training.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Continue the run in `--out` from its last checkpoint.
+    #[arg(long)]
+    pub resume: bool,
+    /// Print the resolved configuration (TOML) and exit.
+    #[arg(long)]
+    pub print_config: bool,
+    /// Compute threads (default: all cores; 1 gives bit-identical reruns).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]

@@ -11,6 +11,7 @@ mod regress;
 mod render;
 mod simulate;
 mod synth;
+mod train;
 mod uv;
 
 use anyhow::Result;
@@ -33,6 +34,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Motions { command } => motions_cmd::run(command),
         Command::Garments { command } => garments_cmd::run(command),
         Command::Uv(args) => uv::run(&args),
+        Command::Train(args) => train::run(&args),
     }
 }
 

@@ -78,6 +78,14 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
+    /// A configuration file or value is unusable.
+    #[error("{path}: {message}")]
+    Config {
+        /// The file (or what was being configured).
+        path: String,
+        /// What is wrong, naming the key.
+        message: String,
+    },
     /// An engine error (recordings, metrics).
     #[error(transparent)]
     Sim(#[from] sim::Error),

@@ -11,5 +11,6 @@ pub mod data;
 mod error;
 pub mod geometry;
 pub mod model;
+pub mod train;
 
 pub use error::{Error, Result};

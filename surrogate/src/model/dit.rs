@@ -265,6 +265,31 @@ mod tests {
     }
 
     #[test]
+    fn condition_path_gradients_match_finite_differences() {
+        let device = Device::flex();
+        device.seed(4);
+        let model = Dit::new(&tiny(), &device);
+        let autodiff = model.clone().train();
+        let (x, pos, mask, s, c) = inputs(2, &device);
+        let weights = Tensor::<4>::random([2, 3, 32, 32], Distribution::Normal(0.0, 1.0), &device);
+        // The loss as a function of the condition vector alone: the condition MLP and every
+        // block's cross-attention.
+        let f = |c: Tensor<3>| {
+            let d = c.device();
+            let m = if d.is_autodiff() { &autodiff } else { &model };
+            let fixed = |t: &Tensor<4>| Tensor::<4>::from_data(t.to_data(), &d);
+            let s = Tensor::<1>::from_data(s.to_data(), &d);
+            let out = m.forward(fixed(&x), fixed(&pos), fixed(&mask), s, c.reshape([2, 5]));
+            (out * fixed(&weights)).sum()
+        };
+        let (along, random) = crate::model::layers::tests::gradient_check(&f, c.reshape([2, 1, 5]));
+        assert!(
+            along < 1e-2 && random < 1e-2,
+            "errors {along:.2e} along the gradient, {random:.2e} across"
+        );
+    }
+
+    #[test]
     fn both_depthwise_kinds_give_one_model() {
         let device = Device::flex();
         device.seed(2);

@@ -234,7 +234,7 @@ impl MixFfn {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use burn::tensor::Distribution;
 
@@ -256,6 +256,62 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f32::max);
         assert!(worst < 1e-5, "largest difference {worst}");
+    }
+
+    /// The autodiff gradient of `f` at `x` checked by central differences: along the gradient
+    /// itself (relative error, where a wrong gradient shows as a wrong length or angle) and
+    /// along random directions (error relative to |g| |d|; ReLU kinks make a tighter bound
+    /// on single random directions meaningless in f32). Returns the worst errors of both.
+    pub(crate) fn gradient_check(f: &dyn Fn(Tensor<3>) -> Tensor<1>, x: Tensor<3>) -> (f64, f64) {
+        let plain = x.device();
+        let device = plain.clone().autodiff();
+        let xa = Tensor::<3>::from_data(x.to_data(), &device).require_grad();
+        let g = xa.grad(&f(xa.clone()).backward()).expect("a gradient");
+        let g = Tensor::<3>::from_data(g.to_data(), &plain);
+        let norm = |t: &Tensor<3>| f64::from(t.clone().square().sum().into_scalar::<f32>()).sqrt();
+        let along = |d: Tensor<3>| {
+            let h = 1e-2 / norm(&d) as f32;
+            let analytic = f64::from((g.clone() * d.clone()).sum().into_scalar::<f32>());
+            let plus = f64::from(f(x.clone() + d.clone().mul_scalar(h)).into_scalar::<f32>());
+            let minus = f64::from(f(x.clone() - d.mul_scalar(h)).into_scalar::<f32>());
+            (analytic, (plus - minus) / (2.0 * f64::from(h)))
+        };
+        let (a, n) = along(g.clone());
+        let relative = (a - n).abs() / n.abs().max(1e-12);
+        let mut random: f64 = 0.0;
+        for _ in 0..3 {
+            let d = g.random_like(Distribution::Normal(0.0, 1.0));
+            let scale = norm(&g) * norm(&d);
+            let (a, n) = along(d);
+            random = random.max((a - n).abs() / scale.max(1e-12));
+        }
+        (relative, random)
+    }
+
+    #[test]
+    fn linear_attention_gradients_match_finite_differences() {
+        let device = Device::flex();
+        device.seed(5);
+        let n = Distribution::Normal(0.0, 1.0);
+        let attention = LinearAttention::new(8, 2, &device);
+        let weights = Tensor::<3>::random([2, 6, 8], n, &device);
+        let autodiff = attention.clone().train();
+        let f = |x: Tensor<3>| {
+            let model = if x.device().is_autodiff() {
+                &autodiff
+            } else {
+                &attention
+            };
+            let w = Tensor::<3>::from_data(weights.to_data(), &x.device());
+            (model.forward(x) * w).sum()
+        };
+        for k in 0..3 {
+            let (along, random) = gradient_check(&f, Tensor::<3>::random([2, 6, 8], n, &device));
+            assert!(
+                along < 1e-2 && random < 1e-2,
+                "draw {k}: errors {along:.2e} along the gradient, {random:.2e} across"
+            );
+        }
     }
 
     #[test]

@@ -1,0 +1,115 @@
+//! `dit-garment train`: the surrogate trained on training tensors, with a progress bar (loss,
+//! samples/s, ETA), resumable from its checkpoints.
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use surrogate::data::TrainingTensors;
+use surrogate::train::{Event, RunConfig, TrainOptions, train};
+
+use crate::cli::TrainArgs;
+
+/// The configuration the flags ask for: the defaults (or, resuming, the run's own
+/// `config.toml`), then `--config`, then `--steps`, `--batch`, `--seed`.
+fn resolve(args: &TrainArgs) -> Result<RunConfig> {
+    let own = args.out.join("config.toml");
+    let mut config = match (&args.config, args.resume && own.exists()) {
+        (Some(path), _) => RunConfig::load(path)?,
+        (None, true) => RunConfig::load(&own)?,
+        (None, false) => RunConfig::default(),
+    };
+    if let Some(steps) = args.steps {
+        config.training.steps = steps;
+    }
+    if let Some(batch) = args.batch {
+        config.training.batch = batch;
+    }
+    if let Some(seed) = args.seed {
+        config.training.seed = seed;
+    }
+    Ok(config)
+}
+
+pub fn run(args: &TrainArgs) -> Result<()> {
+    if let Some(threads) = args.threads {
+        if threads == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .context("setting the thread count")?;
+    }
+    if let Some(m) = args.minutes
+        && !(m.is_finite() && m > 0.0)
+    {
+        bail!("--minutes {m}: must be a positive number of minutes");
+    }
+    let mut config = resolve(args)?;
+    let tensors = TrainingTensors::open(&args.data)
+        .with_context(|| format!("reading the training tensors in {}", args.data.display()))?;
+    config.fit_to(&tensors);
+    if let Err(e) = config.validate() {
+        bail!("{e}");
+    }
+    if args.print_config {
+        print!("{}", config.to_toml());
+        return Ok(());
+    }
+    drop(tensors);
+    let options = TrainOptions {
+        data: args.data.clone(),
+        out: args.out.clone(),
+        config,
+        minutes: args.minutes,
+        resume: args.resume,
+    };
+    let bar = ProgressBar::new(options.config.training.steps as u64).with_style(
+        ProgressStyle::with_template("training [{bar:30}] {pos}/{len} steps, {msg} (eta {eta})")?
+            .progress_chars("=> "),
+    );
+    if args.quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let mut samples_per_s = 0.0;
+    let mut last_val = None;
+    let summary = train(&options, &mut |event| match event {
+        Event::Started {
+            step,
+            steps,
+            parameters,
+            train_frames,
+            val_frames,
+        } => {
+            bar.set_position(step as u64);
+            bar.reset_eta();
+            bar.println(format!(
+                "training {parameters} parameters on {train_frames} frames ({val_frames} held out for validation), steps {step}..{steps}"
+            ));
+        }
+        Event::Step { step, loss } => {
+            bar.set_position(step as u64);
+            let val = last_val.map(|v: f64| format!(", val {v:.4}")).unwrap_or_default();
+            bar.set_message(format!("loss {loss:.4}{val}, {samples_per_s:.1} samples/s"));
+        }
+        Event::Log(line) => {
+            samples_per_s = line.samples_per_s;
+            if line.val_loss.is_some() {
+                last_val = line.val_loss;
+            }
+        }
+    })
+    .with_context(|| format!("training into {}", args.out.display()))?;
+    bar.finish_and_clear();
+    println!(
+        "trained {} steps in {:.1} s ({:.2} samples/s): final loss {:.4}, best validation loss {}; weights in {}",
+        summary.steps,
+        summary.wall_s,
+        summary.samples_per_s,
+        summary.final_loss,
+        summary
+            .best_val_loss
+            .map_or("none".into(), |v| format!("{v:.4}")),
+        args.out.join("model.safetensors").display()
+    );
+    Ok(())
+}

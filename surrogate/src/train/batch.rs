@@ -1,0 +1,201 @@
+//! Rectified-flow batches: frames drawn from a split, times and noise drawn from a generator
+//! seeded by (run seed, step), so any step's batch is the same whether the run was resumed or
+//! not; and the weighted velocity loss.
+//!
+//! Noise is Box-Muller over the seeded ChaCha stream (a few lines; the model's own RNG is one
+//! global state in burn and would tie the batches to program order).
+
+use burn::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::config::{TimeSampling, TrainConfig};
+use crate::data::{Frames, TrainingTensors};
+
+/// A generator for `purpose` at `step` of the run seeded by `seed`.
+pub fn generator(seed: u64, purpose: u64, step: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(purpose);
+    rng.set_word_pos(u128::from(step) << 32);
+    rng
+}
+
+/// Stream of the training batches.
+pub const TRAIN_STREAM: u64 = 1;
+/// Stream of the validation draws.
+pub const VALIDATION_STREAM: u64 = 2;
+
+/// A standard normal draw.
+pub fn normal(rng: &mut ChaCha8Rng) -> f32 {
+    let u1: f64 = rng.random::<f64>().max(1e-300);
+    let u2: f64 = rng.random();
+    ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
+}
+
+/// A time in (0, 1).
+pub fn time(rng: &mut ChaCha8Rng, training: &TrainConfig) -> f32 {
+    match training.time_sampling {
+        TimeSampling::Uniform => rng.random::<f32>(),
+        TimeSampling::LogitNormal => {
+            let z = training.logit_mean + training.logit_std * f64::from(normal(rng));
+            (1.0 / (1.0 + (-z).exp())) as f32
+        }
+    }
+}
+
+/// One batch as plain arrays (channels first, flat).
+#[derive(Debug, Clone, Default)]
+pub struct Batch {
+    /// Frames.
+    pub size: usize,
+    /// z_s = (1 - s) z0 + s eps, `[B, 3, R, R]`.
+    pub noisy: Vec<f32>,
+    /// `[B, 3, R, R]`.
+    pub position: Vec<f32>,
+    /// The loss masks, `[B, 1, R, R]`.
+    pub mask: Vec<f32>,
+    /// Loss weight per texel, `[B, 1, R, R]`.
+    pub weight: Vec<f32>,
+    /// `[B]`.
+    pub time: Vec<f32>,
+    /// `[B, D]`.
+    pub conditions: Vec<f32>,
+    /// eps - z0, `[B, 3, R, R]`.
+    pub velocity: Vec<f32>,
+}
+
+impl Batch {
+    /// The batch of `frames` (indices into `split`) at times `times` with noise from `rng`.
+    pub fn new(
+        tensors: &TrainingTensors,
+        split: &Frames,
+        frames: &[usize],
+        times: &[f32],
+        inside_weight: f32,
+        rng: &mut ChaCha8Rng,
+    ) -> Self {
+        let r = tensors.resolution();
+        let plane = r * r;
+        let d = tensors.manifest.condition_dim;
+        let mut b = Self {
+            size: frames.len(),
+            time: times.to_vec(),
+            ..Self::default()
+        };
+        for (&f, &s) in frames.iter().zip(times) {
+            let g = split.template[f];
+            let z0 = &split.targets[f * 3 * plane..(f + 1) * 3 * plane];
+            for &x in z0 {
+                let eps = normal(rng);
+                b.noisy.push((1.0 - s) * x + s * eps);
+                b.velocity.push(eps - x);
+            }
+            b.position
+                .extend_from_slice(&tensors.position_maps[g * 3 * plane..(g + 1) * 3 * plane]);
+            let mask = &tensors.masks[g * plane..(g + 1) * plane];
+            let inside = &tensors.inside[g * plane..(g + 1) * plane];
+            b.mask.extend_from_slice(mask);
+            b.weight.extend(
+                mask.iter()
+                    .zip(inside)
+                    .map(|(&m, &i)| m * (1.0 + (inside_weight - 1.0) * i)),
+            );
+            b.conditions
+                .extend_from_slice(&split.conditions[f * d..(f + 1) * d]);
+        }
+        b
+    }
+
+    /// The training batch of `step`: frames uniform with replacement, times per `training`.
+    pub fn training(
+        tensors: &TrainingTensors,
+        split: &Frames,
+        training: &TrainConfig,
+        step: usize,
+    ) -> Self {
+        let mut rng = generator(training.seed, TRAIN_STREAM, step as u64);
+        let frames: Vec<usize> = (0..training.batch)
+            .map(|_| rng.random_range(0..split.len()))
+            .collect();
+        let times: Vec<f32> = (0..training.batch)
+            .map(|_| time(&mut rng, training))
+            .collect();
+        Self::new(
+            tensors,
+            split,
+            &frames,
+            &times,
+            training.inside_weight as f32,
+            &mut rng,
+        )
+    }
+
+    /// The model's inputs on `device`: noisy, position, mask, time, conditions.
+    pub fn inputs(
+        &self,
+        device: &Device,
+    ) -> (Tensor<4>, Tensor<4>, Tensor<4>, Tensor<1>, Tensor<2>) {
+        let (b, plane) = (self.size, self.mask.len() / self.size.max(1));
+        let r = (plane as f64).sqrt().round() as usize;
+        let d = self.conditions.len() / b.max(1);
+        let t4 = |v: &[f32], c: usize| {
+            Tensor::<4>::from_data(TensorData::new(v.to_vec(), [b, c, r, r]), device)
+        };
+        (
+            t4(&self.noisy, 3),
+            t4(&self.position, 3),
+            t4(&self.mask, 1),
+            Tensor::<1>::from_data(TensorData::new(self.time.clone(), [b]), device),
+            Tensor::<2>::from_data(TensorData::new(self.conditions.clone(), [b, d]), device),
+        )
+    }
+
+    /// The weighted mean squared error of a predicted velocity `[B, 3, R, R]`:
+    /// sum w (v - eps + z0)^2 / (3 sum w), a scalar `[1]`.
+    pub fn loss(&self, predicted: Tensor<4>) -> Tensor<1> {
+        let device = predicted.device();
+        let [b, _, r, _] = predicted.dims();
+        let target = Tensor::<4>::from_data(
+            TensorData::new(self.velocity.clone(), [b, 3, r, r]),
+            &device,
+        );
+        let weight =
+            Tensor::<4>::from_data(TensorData::new(self.weight.clone(), [b, 1, r, r]), &device);
+        let total: f32 = self.weight.iter().sum::<f32>().max(1e-12) * 3.0;
+        ((predicted - target).square() * weight)
+            .sum()
+            .div_scalar(total)
+    }
+}
+
+/// The fixed validation set: `count` frames evenly spaced over `split`, each at its own
+/// stratified time ((k + 0.5) / count) with noise from the validation stream.
+pub fn validation_batches(
+    tensors: &TrainingTensors,
+    split: &Frames,
+    training: &TrainConfig,
+) -> Vec<Batch> {
+    let count = training.val_frames.min(split.len());
+    if count == 0 {
+        return Vec::new();
+    }
+    let frames: Vec<usize> = (0..count).map(|k| k * split.len() / count).collect();
+    let times: Vec<f32> = (0..count)
+        .map(|k| (k as f32 + 0.5) / count as f32)
+        .collect();
+    let mut rng = generator(training.seed, VALIDATION_STREAM, 0);
+    frames
+        .chunks(training.batch)
+        .zip(times.chunks(training.batch))
+        .map(|(f, t)| {
+            Batch::new(
+                tensors,
+                split,
+                f,
+                t,
+                training.inside_weight as f32,
+                &mut rng,
+            )
+        })
+        .collect()
+}

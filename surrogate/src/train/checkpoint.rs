@@ -1,0 +1,185 @@
+//! Checkpoints for resume: `RUN/checkpoint-<step>/` holds the model, the AdamW state and the EMA
+//! (burnpack, which keeps the parameter ids the optimizer state is keyed by; safetensors would
+//! silently restart AdamW), the configuration and the run's counters. A checkpoint is written
+//! under a temporary name and renamed, then `RUN/checkpoint.json` is pointed at it, so a run
+//! killed at any moment resumes from the last whole checkpoint.
+
+use std::path::{Path, PathBuf};
+
+use burn::optim::{AdamWConfig, ModuleOptimizer};
+use burn::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::config::{RunConfig, TrainConfig};
+use crate::error::{Error, Result};
+use crate::model::Dit;
+
+/// The counters a resumed run continues from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunState {
+    /// Steps done.
+    pub step: usize,
+    /// Wall time of all sessions so far, s.
+    pub wall_s: f64,
+    /// Lowest validation loss so far.
+    pub best_val_loss: Option<f64>,
+}
+
+/// `RUN/checkpoint.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Pointer {
+    step: usize,
+    dir: String,
+}
+
+fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
+    Error::File {
+        path: path.display().to_string(),
+        problem: problem.to_string(),
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary name.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_file_name(format!(
+        ".{}.tmp",
+        path.file_name().and_then(|n| n.to_str()).unwrap_or("file")
+    ));
+    std::fs::write(&tmp, bytes).map_err(|e| file_error(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))
+}
+
+/// AdamW as the run's configuration sets it (eps and weight decay explicit: burn's defaults
+/// are not PyTorch's).
+pub fn optimizer(training: &TrainConfig) -> ModuleOptimizer {
+    AdamWConfig::new()
+        .with_beta_1(training.beta1 as f32)
+        .with_beta_2(training.beta2 as f32)
+        .with_epsilon(training.adam_eps as f32)
+        .with_weight_decay(training.weight_decay as f32)
+        .init()
+}
+
+/// Saves a checkpoint of `state.step` and removes older ones.
+pub fn save(
+    run: &Path,
+    config: &RunConfig,
+    model: &Dit,
+    optim: &ModuleOptimizer,
+    ema: &Dit,
+    state: &RunState,
+) -> Result<()> {
+    let name = format!("checkpoint-{:08}", state.step);
+    let tmp = run.join(format!(".{name}.tmp"));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).map_err(|e| file_error(&tmp, e))?;
+    let fail = |file: &str, e: &dyn std::fmt::Display| file_error(&tmp.join(file), e);
+    model
+        .clone()
+        .save_file(tmp.join("model.bpk"))
+        .map_err(|e| fail("model.bpk", &e))?;
+    optim
+        .save(tmp.join("optim.bpk"))
+        .map_err(|e| fail("optim.bpk", &e))?;
+    ema.clone()
+        .save_file(tmp.join("ema.bpk"))
+        .map_err(|e| fail("ema.bpk", &e))?;
+    std::fs::write(tmp.join("config.toml"), config.to_toml())
+        .map_err(|e| fail("config.toml", &e))?;
+    let json = serde_json::to_vec_pretty(state).expect("the run state serializes");
+    std::fs::write(tmp.join("state.json"), json).map_err(|e| fail("state.json", &e))?;
+    let dir = run.join(&name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::rename(&tmp, &dir).map_err(|e| file_error(&dir, e))?;
+    let pointer = Pointer {
+        step: state.step,
+        dir: name.clone(),
+    };
+    write_atomic(
+        &run.join("checkpoint.json"),
+        &serde_json::to_vec_pretty(&pointer).expect("the pointer serializes"),
+    )?;
+    for old in checkpoint_dirs(run) {
+        if old.file_name().and_then(|n| n.to_str()) != Some(name.as_str()) {
+            let _ = std::fs::remove_dir_all(old);
+        }
+    }
+    Ok(())
+}
+
+fn checkpoint_dirs(run: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(run) else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.is_dir()
+                && p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with("checkpoint-") || n.starts_with(".checkpoint-"))
+        })
+        .collect()
+}
+
+/// A loaded checkpoint: the model (on the autodiff device), its optimizer, the EMA (plain) and
+/// the counters.
+pub struct Loaded {
+    /// Trainable model.
+    pub model: Dit,
+    /// AdamW with its moments.
+    pub optim: ModuleOptimizer,
+    /// EMA weights.
+    pub ema: Dit,
+    /// Counters.
+    pub state: RunState,
+}
+
+/// The run's last checkpoint, or `None` when it has none yet. A checkpoint of another
+/// configuration, or a damaged one, is an error naming the file.
+pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Loaded>> {
+    let pointer_path = run.join("checkpoint.json");
+    if !pointer_path.exists() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&pointer_path).map_err(|e| file_error(&pointer_path, e))?;
+    let pointer: Pointer = serde_json::from_str(&text)
+        .map_err(|e| file_error(&pointer_path, format!("damaged: {e}")))?;
+    let dir = run.join(&pointer.dir);
+    let saved_path = dir.join("config.toml");
+    let saved = RunConfig::load(&saved_path)?;
+    if let Some(difference) = config.first_difference(&saved) {
+        return Err(file_error(
+            &saved_path,
+            format!(
+                "the checkpoint was made with another configuration ({difference}); resume with the run's own configuration or train into a new folder"
+            ),
+        ));
+    }
+    let damaged = |file: &str, e: &dyn std::fmt::Display| {
+        file_error(&dir.join(file), format!("damaged or of another model: {e}"))
+    };
+    let model = Dit::new(&config.model, device)
+        .try_load_file(dir.join("model.bpk"))
+        .map_err(|e| damaged("model.bpk", &e))?;
+    let optim = optimizer(&config.training)
+        .load(dir.join("optim.bpk"))
+        .map_err(|e| damaged("optim.bpk", &e))?;
+    let ema = Dit::new(&config.model, &device.clone().inner())
+        .try_load_file(dir.join("ema.bpk"))
+        .map_err(|e| damaged("ema.bpk", &e))?;
+    let state_path = dir.join("state.json");
+    let text = std::fs::read_to_string(&state_path).map_err(|e| file_error(&state_path, e))?;
+    let state: RunState = serde_json::from_str(&text)
+        .map_err(|e| file_error(&state_path, format!("damaged: {e}")))?;
+    if state.step != pointer.step {
+        return Err(file_error(&state_path, "does not match checkpoint.json"));
+    }
+    Ok(Some(Loaded {
+        model,
+        optim,
+        ema,
+        state,
+    }))
+}

@@ -1,0 +1,272 @@
+//! A training run's configuration: the model (`[model]`) and the optimization (`[training]`),
+//! one TOML file (`RUN/config.toml`, `train --config`, `train --print-config`) laid over the
+//! defaults, every key named when it is unknown or bad.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::model::DitConfig;
+
+/// How rectified-flow times are drawn during training.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeSampling {
+    /// sigmoid(N(mean, std)) (Sana's and SD3's choice: more weight mid-way).
+    LogitNormal,
+    /// U(0, 1).
+    Uniform,
+}
+
+/// The optimization.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainConfig {
+    /// Optimizer steps of the whole run (the learning-rate schedule spans them).
+    pub steps: usize,
+    /// Frames per step.
+    pub batch: usize,
+    /// Seeds the weights, the batches, the noise and the validation draws.
+    pub seed: u64,
+    /// Peak learning rate (AdamW).
+    pub lr: f64,
+    /// Decoupled weight decay (AdamW; burn's default is 1e-4, PyTorch's 1e-2).
+    pub weight_decay: f64,
+    /// AdamW epsilon (burn's default is 1e-5, PyTorch's 1e-8).
+    pub adam_eps: f64,
+    /// AdamW first-moment decay.
+    pub beta1: f64,
+    /// AdamW second-moment decay.
+    pub beta2: f64,
+    /// Steps of linear warm-up before the cosine decay to zero.
+    pub warmup_steps: usize,
+    /// Gradients are scaled down to this global L2 norm when larger (0: no clipping).
+    pub grad_clip_norm: f64,
+    /// Decay of the exponential moving average of the weights (the shipped weights).
+    pub ema_decay: f64,
+    /// Time sampling.
+    pub time_sampling: TimeSampling,
+    /// Mean of the logit-normal's normal.
+    pub logit_mean: f64,
+    /// Standard deviation of the logit-normal's normal.
+    pub logit_std: f64,
+    /// Loss weight of texels inside a chart, relative to texels only read back (outside the
+    /// loss mask the weight is 0).
+    pub inside_weight: f64,
+    /// Steps between log lines (the logged loss is the mean over them).
+    pub log_every: usize,
+    /// Steps between validation losses (a multiple of `log_every`).
+    pub val_every: usize,
+    /// Held-out frames the validation loss averages over (evenly spaced in the split).
+    pub val_frames: usize,
+    /// The tensors' split validation frames come from (never trained on).
+    pub val_split: String,
+    /// Steps between checkpoints (a multiple of `log_every`).
+    pub checkpoint_every: usize,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            steps: 3000,
+            batch: 8,
+            seed: 0,
+            lr: 1e-4,
+            weight_decay: 1e-2,
+            adam_eps: 1e-8,
+            beta1: 0.9,
+            beta2: 0.999,
+            warmup_steps: 100,
+            grad_clip_norm: 1.0,
+            ema_decay: 0.999,
+            time_sampling: TimeSampling::LogitNormal,
+            logit_mean: 0.0,
+            logit_std: 1.0,
+            inside_weight: 1.0,
+            log_every: 10,
+            val_every: 100,
+            val_frames: 64,
+            val_split: "test".into(),
+            checkpoint_every: 100,
+        }
+    }
+}
+
+impl TrainConfig {
+    /// Names the first bad value.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let bad = |key: &str, value: &dyn std::fmt::Display, expected: &str| {
+            Err(format!("training.{key} = {value}: {expected}"))
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if self.steps == 0 || self.steps > 100_000_000 {
+            return bad("steps", &self.steps, "must be 1 to 1e8");
+        }
+        if self.batch == 0 || self.batch > 4096 {
+            return bad("batch", &self.batch, "must be 1 to 4096");
+        }
+        if !positive(self.lr) || self.lr > 1.0 {
+            return bad("lr", &self.lr, "must be in (0, 1]");
+        }
+        if !(self.weight_decay.is_finite() && (0.0..1.0).contains(&self.weight_decay)) {
+            return bad("weight_decay", &self.weight_decay, "must be in [0, 1)");
+        }
+        if !positive(self.adam_eps) {
+            return bad("adam_eps", &self.adam_eps, "must be a positive number");
+        }
+        for (key, v) in [
+            ("beta1", self.beta1),
+            ("beta2", self.beta2),
+            ("ema_decay", self.ema_decay),
+        ] {
+            if !(v.is_finite() && (0.0..1.0).contains(&v)) {
+                return bad(key, &v, "must be in [0, 1)");
+            }
+        }
+        if !(self.grad_clip_norm.is_finite() && self.grad_clip_norm >= 0.0) {
+            return bad(
+                "grad_clip_norm",
+                &self.grad_clip_norm,
+                "must be 0 (off) or positive",
+            );
+        }
+        if !self.logit_mean.is_finite() {
+            return bad("logit_mean", &self.logit_mean, "must be finite");
+        }
+        if !positive(self.logit_std) {
+            return bad("logit_std", &self.logit_std, "must be a positive number");
+        }
+        if !(self.inside_weight.is_finite() && self.inside_weight >= 0.0) {
+            return bad(
+                "inside_weight",
+                &self.inside_weight,
+                "must be 0 or positive",
+            );
+        }
+        if self.log_every == 0 {
+            return bad("log_every", &self.log_every, "must be at least 1");
+        }
+        for (key, v) in [
+            ("val_every", self.val_every),
+            ("checkpoint_every", self.checkpoint_every),
+        ] {
+            if v == 0 || v % self.log_every != 0 {
+                return bad(key, &v, "must be a positive multiple of log_every");
+            }
+        }
+        if self.val_frames > 100_000 {
+            return bad("val_frames", &self.val_frames, "must be at most 100000");
+        }
+        Ok(())
+    }
+
+    /// The learning rate of `step` (0-based): linear warm-up, then cosine decay to zero at
+    /// `steps`.
+    pub fn lr_at(&self, step: usize) -> f64 {
+        if step < self.warmup_steps {
+            return self.lr * (step + 1) as f64 / self.warmup_steps as f64;
+        }
+        let span = (self.steps - self.warmup_steps.min(self.steps)).max(1) as f64;
+        let progress = ((step - self.warmup_steps) as f64 / span).min(1.0);
+        self.lr * 0.5 * (1.0 + (std::f64::consts::PI * progress).cos())
+    }
+}
+
+/// `RUN/config.toml`: the model and its training.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunConfig {
+    /// The network.
+    pub model: DitConfig,
+    /// The optimization.
+    pub training: TrainConfig,
+}
+
+impl RunConfig {
+    /// Both halves checked.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        self.model.validate()?;
+        self.training.validate()
+    }
+
+    /// As TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a run configuration serializes as TOML")
+    }
+
+    /// Parses TOML over the defaults; `source` names it in errors. Not validated.
+    pub fn from_toml(text: &str, source: &str) -> Result<Self> {
+        let defaults = Self::default();
+        sim::config::toml_over_defaults(text, &defaults, &defaults).map_err(|message| {
+            Error::Config {
+                path: source.to_string(),
+                message,
+            }
+        })
+    }
+
+    /// Reads a file over the defaults.
+    pub fn load(path: &std::path::Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Config {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// The first key whose value differs from `other`'s, as `key = here (there)`.
+    pub fn first_difference(&self, other: &Self) -> Option<String> {
+        let (a, b) = (
+            toml::Table::try_from(self).ok()?,
+            toml::Table::try_from(other).ok()?,
+        );
+        for (section, va) in &a {
+            let (Some(ta), Some(tb)) = (va.as_table(), b.get(section).and_then(|v| v.as_table()))
+            else {
+                continue;
+            };
+            for (key, x) in ta {
+                let y = tb.get(key);
+                if y != Some(x) {
+                    let y = y.map(|y| y.to_string()).unwrap_or_else(|| "absent".into());
+                    return Some(format!("{section}.{key} = {x} here, {y} there"));
+                }
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_named() {
+        let err = RunConfig::from_toml("[model]\nwidht = 64\n", "m.toml").unwrap_err();
+        assert!(err.to_string().contains("m.toml") && err.to_string().contains("model.widht"));
+        let c = RunConfig::from_toml("[training]\nlr = -1.0\n", "m.toml").unwrap();
+        assert_eq!(
+            c.validate().unwrap_err(),
+            "training.lr = -1: must be in (0, 1]"
+        );
+        let c = RunConfig::from_toml("[model]\nwidth = 64\nheads = 2\n", "m.toml").unwrap();
+        assert_eq!(c.model.width, 64);
+        assert_eq!(c.training, TrainConfig::default());
+        let d = c.first_difference(&RunConfig::default()).unwrap();
+        assert_eq!(d, "model.heads = 2 here, 4 there");
+    }
+
+    #[test]
+    fn the_schedule_warms_up_then_decays_to_zero() {
+        let t = TrainConfig {
+            steps: 110,
+            warmup_steps: 10,
+            ..TrainConfig::default()
+        };
+        assert!((t.lr_at(0) - 1e-5).abs() < 1e-12);
+        assert!((t.lr_at(9) - 1e-4).abs() < 1e-12);
+        assert!((t.lr_at(10) - 1e-4).abs() < 1e-12);
+        assert!((t.lr_at(60) - 5e-5).abs() < 1e-12);
+        assert!(t.lr_at(110) < 1e-12);
+    }
+}

@@ -1,0 +1,120 @@
+//! What a run hands on: `model.safetensors` (the EMA weights under the names PyTorch users
+//! expect: a Linear's weight is `[out, in]`), `reference.safetensors` (a fixed input and the
+//! model's output on it, which `tools/dit_reference.py` recomputes in NumPy), and loading a
+//! run's weights back for sampling, checked against its `config.toml`.
+
+use std::path::Path;
+
+use burn::prelude::*;
+use burn::store::{BurnToPyTorchAdapter, ModuleSnapshot, PyTorchToBurnAdapter, SafetensorsStore};
+use safetensors::tensor::{Dtype, TensorView};
+
+use super::batch::Batch;
+use super::checkpoint::write_atomic;
+use super::config::RunConfig;
+use crate::error::{Error, Result};
+use crate::model::Dit;
+
+fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
+    Error::File {
+        path: path.display().to_string(),
+        problem: problem.to_string(),
+    }
+}
+
+/// Writes `model` to `path` (safetensors, PyTorch names), through a temporary name.
+pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
+    let tmp = path.with_file_name(".model.safetensors.tmp");
+    let mut store = SafetensorsStore::from_file(&tmp)
+        .overwrite(true)
+        .with_to_adapter(BurnToPyTorchAdapter);
+    model
+        .save_into(&mut store)
+        .map_err(|e| file_error(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))
+}
+
+/// The model of a run folder: `RUN/config.toml` and `RUN/model.safetensors`, on `device`.
+/// Weights that do not fit the configuration (missing, extra or of another shape) are an
+/// error naming the file, never a silent partial load.
+pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
+    let config_path = run.join("config.toml");
+    let config = RunConfig::load(&config_path)?;
+    config.validate().map_err(|e| file_error(&config_path, e))?;
+    let weights = run.join("model.safetensors");
+    if !weights.is_file() {
+        return Err(file_error(&weights, "missing (train the model first)"));
+    }
+    let mut model = Dit::new(&config.model, device);
+    let mut store = SafetensorsStore::from_file(&weights).with_from_adapter(PyTorchToBurnAdapter);
+    let result = model.load_from(&mut store).map_err(|e| {
+        file_error(
+            &weights,
+            format!("damaged or not this model's weights: {e}"),
+        )
+    })?;
+    if !result.is_success() || !result.missing.is_empty() || !result.unused.is_empty() {
+        return Err(file_error(
+            &weights,
+            format!("does not fit {}: {result}", config_path.display()),
+        ));
+    }
+    Ok((config, model))
+}
+
+/// Writes the batch's inputs and `model`'s output on them to `path`.
+pub fn save_reference(model: &Dit, batch: &Batch, path: &Path) -> Result<()> {
+    let device = Device::flex();
+    let (noisy, position, mask, time, conditions) = batch.inputs(&device);
+    let output = model.forward(
+        noisy.clone(),
+        position.clone(),
+        mask.clone(),
+        time.clone(),
+        conditions.clone(),
+    );
+    let named: Vec<(&str, Tensor<4>)> = vec![
+        ("noisy", noisy),
+        ("position", position),
+        ("mask", mask),
+        ("output", output),
+    ];
+    let mut arrays: Vec<(String, Vec<usize>, Vec<u8>)> = named
+        .into_iter()
+        .map(|(name, t)| {
+            (
+                name.to_string(),
+                t.dims().to_vec(),
+                bytes(t.try_into_vec_as::<f32>()),
+            )
+        })
+        .collect();
+    arrays.push((
+        "timestep".into(),
+        time.dims().to_vec(),
+        bytes(time.try_into_vec_as::<f32>()),
+    ));
+    arrays.push((
+        "conditions".into(),
+        conditions.dims().to_vec(),
+        bytes(conditions.try_into_vec_as::<f32>()),
+    ));
+    let views = arrays
+        .iter()
+        .map(|(name, shape, data)| {
+            TensorView::new(Dtype::F32, shape.clone(), data)
+                .map(|v| (name.clone(), v))
+                .map_err(|e| file_error(path, e))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let serialized = safetensors::serialize(views, None).map_err(|e| file_error(path, e))?;
+    write_atomic(path, &serialized)
+}
+
+fn bytes<E: std::fmt::Debug>(values: std::result::Result<Vec<f32>, E>) -> Vec<u8> {
+    values
+        .expect("f32 tensors read back as f32")
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect()
+}
