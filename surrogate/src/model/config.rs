@@ -84,7 +84,7 @@ impl DitConfig {
         if self.depth == 0 || self.depth > 64 {
             return bad("depth", &self.depth, "must be 1 to 64");
         }
-        if self.heads == 0 || self.width % self.heads != 0 {
+        if self.heads == 0 || !self.width.is_multiple_of(self.heads) {
             return bad("heads", &self.heads, "must divide the width");
         }
         if !(self.mlp_ratio.is_finite() && self.mlp_ratio > 0.0 && self.mlp_ratio <= 16.0) {
