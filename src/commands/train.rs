@@ -79,11 +79,13 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             parameters,
             train_frames,
             val_frames,
+            val_split,
         } => {
             bar.set_position(step as u64);
             bar.reset_eta();
             bar.println(format!(
-                "training {parameters} parameters on {train_frames} frames ({val_frames} held out for validation), steps {step}..{steps}"
+                "training {parameters} parameters on {train_frames} frames ({val_frames} of {} for validation), steps {step}..{steps}",
+                val_split.as_deref().unwrap_or("no held-out split")
             ));
         }
         Event::Step { step, loss } => {

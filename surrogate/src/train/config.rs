@@ -58,7 +58,8 @@ pub struct TrainConfig {
     pub val_every: usize,
     /// Held-out frames the validation loss averages over (evenly spaced in the split).
     pub val_frames: usize,
-    /// The tensors' split validation frames come from (never trained on).
+    /// The tensors' split validation frames come from (never trained on); when it has no
+    /// frames, the first held-out split that has.
     pub val_split: String,
     /// Steps between checkpoints (a multiple of `log_every`).
     pub checkpoint_every: usize,

@@ -100,6 +100,8 @@ pub enum Event {
         train_frames: usize,
         /// Validation frames.
         val_frames: usize,
+        /// The split they come from (none when no held-out split has frames).
+        val_split: Option<String>,
     },
     /// A step finished with this loss.
     Step {
@@ -235,7 +237,11 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     if train_frames.is_empty() {
         return Err(file_error(&options.data, "has no training frames"));
     }
-    let val_frames = tensors.frames(&t.val_split)?;
+    let val_split = held_out_split(&tensors, &t.val_split);
+    let val_frames = match &val_split {
+        Some(split) => tensors.frames(split)?,
+        None => crate::data::Frames::default(),
+    };
     let val_batches = validation_batches(&tensors, &val_frames, t);
 
     let device = Device::flex().autodiff();
@@ -266,6 +272,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         parameters,
         train_frames: train_frames.len(),
         val_frames: val_batches.iter().map(|b| b.size).sum(),
+        val_split: val_split.clone(),
     });
 
     let session = Instant::now();
@@ -354,6 +361,20 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let json = serde_json::to_vec_pretty(&summary).expect("the summary serializes");
     write_atomic(&run.join("summary.json"), &json)?;
     Ok(summary)
+}
+
+/// `preferred` when it has frames, else the first held-out split (in `sim::dataset::SPLITS`
+/// order) that has: small datasets often leave the main test split empty.
+fn held_out_split(tensors: &TrainingTensors, preferred: &str) -> Option<String> {
+    let frames = |s: &str| tensors.manifest.splits.get(s).map_or(0, |i| i.frames);
+    if frames(preferred) > 0 {
+        return Some(preferred.to_string());
+    }
+    sim::dataset::SPLITS
+        .iter()
+        .filter(|s| **s != "train")
+        .find(|s| frames(s) > 0)
+        .map(|s| s.to_string())
 }
 
 /// Two held-out frames (training frames when there are none) at s = 0.25 and 0.75: the fixed

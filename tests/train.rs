@@ -1,0 +1,309 @@
+//! End-to-end: `train` as a user runs it on tensors of a small synthesized dataset: every
+//! output with its keys; the NumPy reference reproduces the model's output (and catches a
+//! wrong configuration); a run killed mid-way and resumed logs the uninterrupted run's values;
+//! bad configurations and damaged or mismatched checkpoints are named, with exit 1.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use common::{binary, fails, json, ok, python_has};
+use serde_json::Value;
+
+/// One skirt sequence on walk (train) and one on arm_swing (test), 12 frames each.
+const SPEC: &str = r#"
+name = "train-test"
+seed = 5
+[sequence]
+frames = 12
+blend_frames = 3
+settle_frames = 1
+shapes_per_motion = 1
+draws_per_shape = 1
+[solver]
+substeps = 1
+max_iterations = 4
+[[garments]]
+name = "skirt"
+split = "train"
+[[motions]]
+source = "walk"
+split = "train"
+[[motions]]
+source = "arm_swing"
+split = "test"
+[splits]
+test_motion = 1
+"#;
+
+/// A tiny model and a short schedule: checkpoints every 10 steps.
+const CONFIG: &str = r#"
+[model]
+patch = 4
+width = 16
+depth = 1
+heads = 2
+mlp_ratio = 2.0
+condition_tokens = 2
+[training]
+steps = 60
+batch = 2
+lr = 1e-3
+warmup_steps = 5
+log_every = 5
+val_every = 10
+checkpoint_every = 10
+val_frames = 4
+"#;
+
+/// The tensors (32 x 32, lbs_residual), made once per test binary.
+fn tensors() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir =
+            std::env::temp_dir().join(format!("dit-garment-train-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let spec = dir.join("spec.toml");
+        std::fs::write(&spec, SPEC).unwrap();
+        let data = dir.join("data");
+        let tensors = dir.join("tensors");
+        ok(&[
+            "synth",
+            "--spec",
+            spec.to_str().unwrap(),
+            "--out",
+            data.to_str().unwrap(),
+            "--quiet",
+        ]);
+        ok(&[
+            "dataset",
+            "tensors",
+            data.to_str().unwrap(),
+            "--out",
+            tensors.to_str().unwrap(),
+            "--resolution",
+            "32",
+            "--target",
+            "lbs_residual",
+            "--quiet",
+        ]);
+        std::fs::write(dir.join("model.toml"), CONFIG).unwrap();
+        tensors
+    })
+}
+
+fn config() -> String {
+    tensors()
+        .parent()
+        .unwrap()
+        .join("model.toml")
+        .display()
+        .to_string()
+}
+
+fn train_args<'a>(run: &'a str, config: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let data = tensors().to_str().unwrap();
+    let mut args = vec![
+        "train",
+        "--data",
+        data,
+        "--out",
+        run,
+        "--config",
+        config,
+        "--threads",
+        "1",
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
+fn log(run: &Path) -> Vec<Value> {
+    std::fs::read_to_string(run.join("log.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// The values a resumed run must reproduce exactly (wall times and speeds differ).
+fn curve(log: &[Value]) -> Vec<[Value; 5]> {
+    log.iter()
+        .map(|l| ["step", "loss", "lr", "grad_norm", "val_loss"].map(|k| l[k].clone()))
+        .collect()
+}
+
+#[test]
+fn train_writes_every_output_and_numpy_reproduces_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let cfg = config();
+    ok(&train_args(run.to_str().unwrap(), &cfg, &[]));
+    for file in [
+        "config.toml",
+        "log.jsonl",
+        "loss.png",
+        "model.safetensors",
+        "reference.safetensors",
+        "summary.json",
+        "checkpoint.json",
+    ] {
+        assert!(run.join(file).is_file(), "{file} missing");
+    }
+    let lines = log(&run);
+    assert_eq!(lines.len(), 12, "a line every 5 of 60 steps");
+    for l in &lines {
+        for key in ["step", "loss", "lr", "grad_norm", "samples_per_s", "wall_s"] {
+            assert!(l[key].is_number(), "{key} in {l}");
+        }
+    }
+    assert!(lines.iter().filter(|l| l["val_loss"].is_number()).count() == 6);
+    let first = lines[0]["loss"].as_f64().unwrap();
+    let last = lines.last().unwrap()["loss"].as_f64().unwrap();
+    assert!(last < first, "the loss falls: {first} -> {last}");
+    let summary = json(&run.join("summary.json"));
+    for key in [
+        "steps",
+        "parameters",
+        "final_loss",
+        "best_val_loss",
+        "wall_s",
+        "samples_per_s",
+        "config",
+    ] {
+        assert!(!summary[key].is_null(), "summary.{key}");
+    }
+    assert_eq!(summary["steps"], 60);
+    assert_eq!(summary["config"]["model"]["resolution"], 32);
+    assert_eq!(summary["config"]["model"]["target"], "lbs_residual");
+    let png = image::open(run.join("loss.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (720, 420));
+
+    if python_has("numpy, safetensors, tomllib") {
+        let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/dit_reference.py");
+        let check = |run: &Path| {
+            std::process::Command::new("python3")
+                .arg(&tool)
+                .arg("--check")
+                .arg(run)
+                .output()
+                .unwrap()
+        };
+        let out = check(&run);
+        assert!(
+            out.status.success(),
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // The check can fail: the same weights read as one head instead of two disagree.
+        let text = std::fs::read_to_string(run.join("config.toml")).unwrap();
+        std::fs::write(
+            run.join("config.toml"),
+            text.replace("heads = 2", "heads = 1"),
+        )
+        .unwrap();
+        let out = check(&run);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{}",
+            String::from_utf8_lossy(&out.stdout)
+        );
+    }
+}
+
+#[test]
+fn a_killed_run_resumes_to_the_uninterrupted_curve() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = config();
+    let whole = dir.path().join("whole");
+    ok(&train_args(whole.to_str().unwrap(), &cfg, &[]));
+
+    let cut = dir.path().join("cut");
+    let mut child = binary()
+        .args(train_args(cut.to_str().unwrap(), &cfg, &[]))
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while !cut.join("checkpoint.json").exists() {
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no checkpoint after 2 minutes"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap(); // SIGKILL: no clean-up of any kind
+    child.wait().unwrap();
+    assert!(
+        !cut.join("summary.json").exists(),
+        "the run finished before it was killed"
+    );
+    ok(&train_args(cut.to_str().unwrap(), &cfg, &["--resume"]));
+    assert_eq!(curve(&log(&cut)), curve(&log(&whole)));
+    let (a, b) = (
+        std::fs::read(cut.join("model.safetensors")).unwrap(),
+        std::fs::read(whole.join("model.safetensors")).unwrap(),
+    );
+    let (a, b) = (
+        safetensors::SafeTensors::deserialize(&a).unwrap(),
+        safetensors::SafeTensors::deserialize(&b).unwrap(),
+    );
+    assert_eq!(a.len(), b.len());
+    for (name, tensor) in a.tensors() {
+        let same = b.tensor(&name).is_ok_and(|t| t.data() == tensor.data());
+        assert!(same, "EMA weights '{name}' differ");
+    }
+}
+
+#[test]
+fn bad_configurations_and_damaged_checkpoints_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = config();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[model]\nwidht = 16\n").unwrap();
+    let run = dir.path().join("run");
+    let run_s = run.to_str().unwrap();
+    let err = fails(&train_args(run_s, bad.to_str().unwrap(), &[]));
+    assert!(
+        err.contains("bad.toml") && err.contains("model.widht"),
+        "{err}"
+    );
+    std::fs::write(&bad, "[training]\nlr = 0.0\n").unwrap();
+    let err = fails(&train_args(run_s, bad.to_str().unwrap(), &[]));
+    assert!(err.contains("training.lr = 0"), "{err}");
+    assert!(!run.exists(), "nothing written for a bad configuration");
+
+    ok(&train_args(run_s, &cfg, &["--steps", "20"]));
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "20"]));
+    assert!(err.contains("already holds a training run"), "{err}");
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "40", "--resume"]));
+    assert!(err.contains("training.steps = 40 here, 20 there"), "{err}");
+
+    // A checkpoint made for another model is refused, naming the file and the key.
+    let pointer = json(&run.join("checkpoint.json"));
+    let checkpoint = run.join(pointer["dir"].as_str().unwrap());
+    let saved = checkpoint.join("config.toml");
+    let text = std::fs::read_to_string(&saved).unwrap();
+    std::fs::write(&saved, text.replace("width = 16", "width = 32")).unwrap();
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    assert!(
+        err.contains("config.toml") && err.contains("model.width = 16 here, 32 there"),
+        "{err}"
+    );
+    std::fs::write(&saved, text).unwrap();
+
+    // A damaged model file is named.
+    let model = checkpoint.join("model.bpk");
+    let bytes = std::fs::read(&model).unwrap();
+    std::fs::write(&model, &bytes[..bytes.len() / 2]).unwrap();
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    assert!(
+        err.contains("model.bpk") && err.contains("damaged"),
+        "{err}"
+    );
+}
