@@ -183,6 +183,58 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     let png = image::open(run.join("loss.png")).unwrap();
     assert_eq!((png.width(), png.height()), (720, 420));
 
+    // The weights load back into the model they came from, and reproduce the reference output.
+    let device = surrogate::burn::prelude::Device::flex();
+    let (loaded, model) = surrogate::train::load_run(&run, &device).unwrap();
+    assert_eq!(loaded.model.width, 16);
+    let reference = std::fs::read(run.join("reference.safetensors")).unwrap();
+    let reference = safetensors::SafeTensors::deserialize(&reference).unwrap();
+    let tensor = |name: &str, dims: usize| {
+        let t = reference.tensor(name).unwrap();
+        let values: Vec<f32> = t
+            .data()
+            .chunks(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        (values, t.shape().to_vec(), dims)
+    };
+    use surrogate::burn::prelude::{Tensor, TensorData};
+    let t4 = |name: &str| {
+        let (v, shape, _) = tensor(name, 4);
+        Tensor::<4>::from_data(TensorData::new(v, shape), &device)
+    };
+    let (time, _, _) = tensor("timestep", 1);
+    let (conditions, cshape, _) = tensor("conditions", 2);
+    let out = model.forward(
+        t4("noisy"),
+        t4("position"),
+        t4("mask"),
+        Tensor::<1>::from_data(TensorData::new(time.clone(), [time.len()]), &device),
+        Tensor::<2>::from_data(TensorData::new(conditions, cshape), &device),
+    );
+    let out: Vec<f32> = out.try_into_vec_as().unwrap();
+    let (expected, _, _) = tensor("output", 4);
+    assert_eq!(
+        out, expected,
+        "the loaded weights give the reference output"
+    );
+    // Weights for another configuration are refused, naming the file.
+    let config_text = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    std::fs::write(
+        run.join("config.toml"),
+        config_text.replace("condition_tokens = 2", "condition_tokens = 3"),
+    )
+    .unwrap();
+    let err = surrogate::train::load_run(&run, &device)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("model.safetensors") && err.contains("does not fit"),
+        "{err}"
+    );
+    std::fs::write(run.join("config.toml"), &config_text).unwrap();
+
     if python_has("numpy, safetensors, tomllib") {
         let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/dit_reference.py");
         let check = |run: &Path| {

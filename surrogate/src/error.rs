@@ -3,6 +3,14 @@
 
 use thiserror::Error;
 
+/// An [`Error::File`] naming `path`.
+pub(crate) fn file_error(path: &std::path::Path, problem: impl std::fmt::Display) -> Error {
+    Error::File {
+        path: path.display().to_string(),
+        problem: problem.to_string(),
+    }
+}
+
 /// Result with [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 

@@ -13,4 +13,6 @@ pub mod geometry;
 pub mod model;
 pub mod train;
 
+/// The burn version the model is written for, for callers that build inputs.
+pub use burn;
 pub use error::{Error, Result};

@@ -9,7 +9,7 @@ use safetensors::tensor::Dtype;
 use sha2::{Digest, Sha256};
 
 use super::tensors::{Stats, TensorManifest};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, file_error};
 
 /// A tensors folder: its manifest and its templates, normalized.
 #[derive(Debug, Clone)]
@@ -50,13 +50,6 @@ impl Frames {
     /// Whether there are none.
     pub fn is_empty(&self) -> bool {
         self.template.is_empty()
-    }
-}
-
-fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
-    Error::File {
-        path: path.display().to_string(),
-        problem: problem.to_string(),
     }
 }
 

@@ -17,7 +17,7 @@ use sim::recording::{Recording, TemplateArrays};
 
 use super::conditions::{Block, ConditionLayout};
 use super::sequence::Sequence;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, file_error};
 use crate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
 
 /// How a dataset becomes tensors.
@@ -164,13 +164,6 @@ fn f32_bytes(values: &[f32]) -> Vec<u8> {
 
 fn i64_bytes(values: impl Iterator<Item = usize>) -> Vec<u8> {
     values.flat_map(|v| (v as i64).to_le_bytes()).collect()
-}
-
-fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
-    Error::File {
-        path: path.display().to_string(),
-        problem: problem.to_string(),
-    }
 }
 
 /// Writes `bytes` to `path` through a temporary name, so a stopped run leaves no half file.

@@ -11,7 +11,7 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::config::{RunConfig, TrainConfig};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
 
 /// The counters a resumed run continues from.
@@ -30,13 +30,6 @@ pub struct RunState {
 struct Pointer {
     step: usize,
     dir: String,
-}
-
-fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
-    Error::File {
-        path: path.display().to_string(),
-        problem: problem.to_string(),
-    }
 }
 
 /// Writes `bytes` to `path` through a temporary name.

@@ -12,15 +12,8 @@ use safetensors::tensor::{Dtype, TensorView};
 use super::batch::Batch;
 use super::checkpoint::write_atomic;
 use super::config::RunConfig;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
-
-fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
-    Error::File {
-        path: path.display().to_string(),
-        problem: problem.to_string(),
-    }
-}
 
 /// Writes `model` to `path` (safetensors, PyTorch names), through a temporary name.
 pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
@@ -50,7 +43,10 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     let result = model.load_from(&mut store).map_err(|e| {
         file_error(
             &weights,
-            format!("damaged or not this model's weights: {e}"),
+            format!(
+                "does not fit {} (damaged, or the weights of another model): {e}",
+                config_path.display()
+            ),
         )
     })?;
     if !result.is_success() || !result.missing.is_empty() || !result.unused.is_empty() {

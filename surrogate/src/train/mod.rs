@@ -27,7 +27,7 @@ pub use export::{load_run, save_reference, save_weights};
 pub use optim::{clip_global_norm, ema_decay, update_ema};
 
 use crate::data::TrainingTensors;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
 
 /// One line of `log.jsonl`.
@@ -121,13 +121,6 @@ impl RunConfig {
         self.model.resolution = m.resolution;
         self.model.condition_dim = m.condition_dim;
         self.model.target = m.target;
-    }
-}
-
-fn file_error(path: &Path, problem: impl std::fmt::Display) -> Error {
-    Error::File {
-        path: path.display().to_string(),
-        problem: problem.to_string(),
     }
 }
 
