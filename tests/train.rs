@@ -226,8 +226,7 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     )
     .unwrap();
     let err = surrogate::train::load_run(&run, &device)
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(
         err.contains("model.safetensors") && err.contains("does not fit"),

@@ -79,14 +79,12 @@ fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     let base = DitConfig::default();
     println!(
-        "DiT {}x{}, width {}, depth {}, heads {}, {} condition tokens; `{}`",
-        base.resolution,
-        base.resolution,
+        "DiT {r}x{r}, width {}, depth {}, heads {}, {} condition tokens; `cargo bench -p surrogate --bench dit`",
         base.width,
         base.depth,
         base.heads,
         base.condition_tokens,
-        "cargo bench -p surrogate --bench dit"
+        r = base.resolution,
     );
     println!("| threads | patch | tokens | parameters | batch | forward ms | train samples/s |");
     println!("|---|---|---|---|---|---|---|");

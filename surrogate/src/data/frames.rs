@@ -9,7 +9,7 @@ use safetensors::tensor::Dtype;
 use sha2::{Digest, Sha256};
 
 use super::tensors::{Stats, TensorManifest};
-use crate::error::{Error, Result, file_error};
+use crate::error::{Result, file_error};
 
 /// A tensors folder: its manifest and its templates, normalized.
 #[derive(Debug, Clone)]

@@ -17,7 +17,7 @@ use sim::recording::{Recording, TemplateArrays};
 
 use super::conditions::{Block, ConditionLayout};
 use super::sequence::Sequence;
-use crate::error::{Error, Result, file_error};
+use crate::error::{Result, file_error};
 use crate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
 
 /// How a dataset becomes tensors.

@@ -11,7 +11,7 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::config::{RunConfig, TrainConfig};
-use crate::error::{Error, Result, file_error};
+use crate::error::{Result, file_error};
 use crate::model::Dit;
 
 /// The counters a resumed run continues from.

@@ -12,7 +12,7 @@ use safetensors::tensor::{Dtype, TensorView};
 use super::batch::Batch;
 use super::checkpoint::write_atomic;
 use super::config::RunConfig;
-use crate::error::{Error, Result, file_error};
+use crate::error::{Result, file_error};
 use crate::model::Dit;
 
 /// Writes `model` to `path` (safetensors, PyTorch names), through a temporary name.
