@@ -121,22 +121,25 @@ fn main() {
         }
     }
     println!();
-    println!("| depthwise (patch 2, batch 16, 1 thread) | forward ms | train samples/s |");
-    println!("|---|---|---|");
+    println!("| depthwise | patch | batch | forward ms | train samples/s |");
+    println!("|---|---|---|---|---|");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .expect("a pool");
-    for how in [Depthwise::Shifted, Depthwise::Conv2d] {
-        if filter.as_ref().is_some_and(|f| !f.contains("depthwise")) {
-            continue;
+    for patch in [4, 2] {
+        for how in [Depthwise::Shifted, Depthwise::Conv2d] {
+            if filter.as_ref().is_some_and(|f| !f.contains("depthwise")) {
+                continue;
+            }
+            let config = DitConfig {
+                depthwise: how,
+                patch,
+                ..base.clone()
+            };
+            let forward = pool.install(|| forward_ms(&config, 16));
+            let train = pool.install(|| train_samples_per_s(&config, 16));
+            println!("| {how:?} | {patch} | 16 | {forward:.1} | {train:.2} |");
         }
-        let config = DitConfig {
-            depthwise: how,
-            ..base.clone()
-        };
-        let forward = pool.install(|| forward_ms(&config, 16));
-        let train = pool.install(|| train_samples_per_s(&config, 16));
-        println!("| {how:?} | {forward:.1} | {train:.2} |");
     }
 }
