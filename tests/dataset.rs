@@ -363,9 +363,17 @@ fn bad_specs_get_errors_naming_the_key() {
         ),
     ];
     for (text, key) in cases {
+        // A folder that exists already (a user's, with a file of theirs) is left as it was.
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
         let spec = write_spec(dir.path(), &text);
         let err = fails(&synth_args(spec.to_str().unwrap(), &out, &[]));
         assert!(err.contains(key), "error should name {key}: {err}");
+        assert_eq!(
+            files_in(&out),
+            ["notes.txt"],
+            "a refused spec ({key}) wrote into --out"
+        );
         let _ = std::fs::remove_dir_all(&out);
     }
     let missing = fails(&synth_args("/no/such/spec.toml", &out, &[]));

@@ -220,17 +220,22 @@ fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
     })
 }
 
-/// Stores the spec in the folder, refusing a folder that holds another spec's dataset.
+/// Refuses a folder that holds another spec's dataset.
+fn check_spec(dir: &DatasetDir, spec: &DatasetSpec) -> Result<()> {
+    let path = dir.spec();
+    if path.exists() && &DatasetSpec::load(&path)? != spec {
+        bail!(
+            "{} holds a dataset of a different spec (its spec.toml differs); use another --out",
+            dir.root.display()
+        );
+    }
+    Ok(())
+}
+
+/// Stores the spec in the folder (checked by [`check_spec`] first).
 fn store_spec(dir: &DatasetDir, spec: &DatasetSpec) -> Result<()> {
     let path = dir.spec();
     if path.exists() {
-        let existing = DatasetSpec::load(&path)?;
-        if &existing != spec {
-            bail!(
-                "{} holds a dataset of a different spec (its spec.toml differs); use another --out",
-                dir.root.display()
-            );
-        }
         return Ok(());
     }
     write_atomic(&path, |w| {
@@ -284,16 +289,37 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let motions = expand_motions(&spec).with_context(|| format!("{}", spec_path.display()))?;
     let planned = plan(&spec, &motions);
     let dir = DatasetDir::new(out);
-    std::fs::create_dir_all(&dir.root)
-        .with_context(|| format!("cannot create {}", dir.root.display()))?;
-    store_spec(&dir, &spec)?;
-    write_jsonl(&dir.plan(), &planned)?;
+    // Everything the spec names is checked before the folder is touched, so a refused spec
+    // (a typo in a motion or garment, another spec's folder) leaves the folder as it was.
+    check_spec(&dir, &spec)?;
+    let model = Arc::new(inputs::body_model(args.model.model.as_deref())?);
+    let neutral = model.shape(&[])?;
+    for (source, _) in &motions {
+        inputs::motion(source, &model, &neutral)
+            .with_context(|| format!("{}: motion '{source}'", spec_path.display()))?;
+    }
     let mine: Vec<&PlannedSequence> = planned
         .iter()
         .enumerate()
         .filter(|(i, _)| i % n == k)
         .map(|(_, p)| p)
         .collect();
+    // The templates of this shard's garments, made (or read from the cache) in parallel.
+    let mut names: Vec<&String> = mine.iter().map(|p| &p.garment).collect();
+    names.sort();
+    names.dedup();
+    let made = names
+        .par_iter()
+        .map(|name| {
+            let (garment, attachments) = inputs::garment(name, &model)
+                .with_context(|| format!("{}: garment '{name}'", spec_path.display()))?;
+            Ok(((*name).clone(), (Arc::new(garment), attachments)))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    std::fs::create_dir_all(&dir.root)
+        .with_context(|| format!("cannot create {}", dir.root.display()))?;
+    store_spec(&dir, &spec)?;
+    write_jsonl(&dir.plan(), &planned)?;
     let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
     let leftovers = remove_leftovers(&dir, &ids)?;
     // Finished sequences (checked against their checksums once) and the rest.
@@ -319,29 +345,12 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             String::new()
         }
     );
-    let model = Arc::new(inputs::body_model(args.model.model.as_deref())?);
-    // Every motion loads before anything is simulated, so a typo fails the run at once.
-    let neutral = model.shape(&[])?;
-    for (source, _) in &motions {
-        inputs::motion(source, &model, &neutral)
-            .with_context(|| format!("{}: motion '{source}'", spec_path.display()))?;
+    for (name, (garment, _)) in &made {
+        let template_path = dir.template(name);
+        if !template_path.exists() {
+            inputs::write_template(&template_path, garment)?;
+        }
     }
-    // Templates of the garments still to simulate, made (or read from the cache) in parallel.
-    let mut names: Vec<&String> = todo.iter().map(|p| &p.garment).collect();
-    names.sort();
-    names.dedup();
-    let made = names
-        .par_iter()
-        .map(|name| {
-            let (garment, attachments) = inputs::garment(name, &model)
-                .with_context(|| format!("{}: garment '{name}'", spec_path.display()))?;
-            let template_path = dir.template(name);
-            if !template_path.exists() {
-                inputs::write_template(&template_path, &garment)?;
-            }
-            Ok(((*name).clone(), (Arc::new(garment), attachments)))
-        })
-        .collect::<Result<Vec<_>>>()?;
     let templates: HashMap<_, _> = made.into_iter().collect();
     let ctx = RunContext {
         spec: &spec,
