@@ -83,10 +83,12 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         } => {
             bar.set_position(step as u64);
             bar.reset_eta();
-            bar.println(format!(
-                "training {parameters} parameters on {train_frames} frames ({val_frames} of {} for validation), steps {step}..{steps}",
-                val_split.as_deref().unwrap_or("no held-out split")
-            ));
+            bar.suspend(|| {
+                println!(
+                    "training {parameters} parameters on {train_frames} frames ({val_frames} of {} for validation), steps {step}..{steps}",
+                    val_split.as_deref().unwrap_or("no held-out split")
+                )
+            });
         }
         Event::Step { step, loss } => {
             bar.set_position(step as u64);

@@ -24,6 +24,13 @@ pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
     model
         .save_into(&mut store)
         .map_err(|e| file_error(&tmp, e))?;
+    // burn-store creates the file readable by its owner only; weights are meant to be shared.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| file_error(&tmp, e))?;
+    }
     std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))
 }
 
