@@ -1,8 +1,9 @@
 //! The learned surrogate, DiT-Garment: UV geometry images of garment templates (atlas,
 //! encode, chart-aware readback and its transpose), the canonical frame, the two training
 //! targets (`displacement` and `lbs_residual`), the condition vector, and the training
-//! tensors a dataset becomes. The diffusion transformer, its training and sampling build on
-//! these (later issues).
+//! tensors a dataset becomes (`geometry`, `data`); the diffusion transformer (`model`), its
+//! training with rectified flow (`train`) and the Euler sampler (`sample`). Prediction of whole
+//! sequences with intersection guidance builds on these (issue 23).
 //!
 //! Depends on `sim` for recordings and materials as plain data, never on the scene runner.
 #![warn(missing_docs)]
@@ -11,6 +12,7 @@ pub mod data;
 mod error;
 pub mod geometry;
 pub mod model;
+pub mod sample;
 pub mod train;
 
 /// The burn version the model is written for, for callers that build inputs.
