@@ -54,11 +54,7 @@ fn write_spec(dir: &Path, text: &str) -> PathBuf {
 }
 
 fn manifest(dir: &Path) -> Vec<Value> {
-    std::fs::read_to_string(dir.join("manifest.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
+    common::jsonl(&dir.join("manifest.jsonl"))
 }
 
 /// A manifest line without what legitimately differs between runs: timings, and the

@@ -123,11 +123,7 @@ fn train_args<'a>(run: &'a str, config: &'a str, extra: &[&'a str]) -> Vec<&'a s
 }
 
 fn log(run: &Path) -> Vec<Value> {
-    std::fs::read_to_string(run.join("log.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
+    common::jsonl(&run.join("log.jsonl"))
 }
 
 /// The values a resumed run must reproduce exactly (wall times and speeds differ).

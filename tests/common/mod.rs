@@ -60,6 +60,15 @@ pub fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// A JSON Lines file, one value per line.
+pub fn jsonl(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
 /// Whether `python3` can import `modules` (comma-separated). Where it cannot, the caller skips
 /// its Python check, unless `DIT_GARMENT_REQUIRE_PYTHON` is set (`.ci/run` sets it after
 /// installing the packages), which makes a missing package a failure instead of a skip.

@@ -190,19 +190,7 @@ mod tests {
     use crate::model::config::Depthwise;
     use burn::tensor::Distribution;
 
-    pub(crate) fn tiny() -> DitConfig {
-        DitConfig {
-            resolution: 32,
-            patch: 4,
-            width: 16,
-            depth: 2,
-            heads: 2,
-            mlp_ratio: 2.0,
-            condition_tokens: 2,
-            condition_dim: 5,
-            ..DitConfig::default()
-        }
-    }
+    use crate::model::tests::tiny;
 
     fn inputs(
         b: usize,

@@ -9,3 +9,21 @@ mod layers;
 pub use config::{Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, OUTPUT_CHANNELS};
 pub use dit::{Block, ConditionEmbedder, Dit, TimestepEmbedder};
 pub use layers::{CrossAttention, DepthwiseConv, LinearAttention, MixFfn, norm, timestep_features};
+
+#[cfg(test)]
+pub(crate) mod tests {
+    /// A model small enough for tests: 32 x 32, patch 4, width 16, 2 blocks, 5 conditions.
+    pub(crate) fn tiny() -> super::DitConfig {
+        super::DitConfig {
+            resolution: 32,
+            patch: 4,
+            width: 16,
+            depth: 2,
+            heads: 2,
+            mlp_ratio: 2.0,
+            condition_tokens: 2,
+            condition_dim: 5,
+            ..super::DitConfig::default()
+        }
+    }
+}

@@ -109,16 +109,11 @@ mod tests {
     fn a_tiny_model_overfits_eight_samples() {
         let device = Device::flex().autodiff();
         device.seed(7);
+        // Patch 2 and width 32: white-noise velocity needs a token wide enough to carry it.
         let config = DitConfig {
-            resolution: 32,
             patch: 2,
             width: 32,
-            depth: 2,
-            heads: 2,
-            mlp_ratio: 2.0,
-            condition_tokens: 2,
-            condition_dim: 5,
-            ..DitConfig::default()
+            ..crate::model::tests::tiny()
         };
         let mut model = Dit::new(&config, &device);
         let mut ema = model.valid();
@@ -189,13 +184,9 @@ mod tests {
         let device = Device::flex().autodiff();
         device.seed(8);
         let config = DitConfig {
-            resolution: 32,
-            patch: 4,
-            width: 16,
             depth: 1,
-            heads: 2,
             condition_dim: 3,
-            ..DitConfig::default()
+            ..crate::model::tests::tiny()
         };
         let model = Dit::new(&config, &device);
         let plain = Device::flex();
