@@ -65,6 +65,93 @@ pub enum Command {
     /// Train the surrogate (DiT-Garment, rectified flow) on training tensors (`dataset
     /// tensors` output): checkpoints, resume, loss curves, EMA weights as safetensors.
     Train(TrainArgs),
+    /// Pose a garment directly with a trained surrogate: every frame of a motion sampled from
+    /// noise (Euler, rectified flow) with intersection guidance, recorded as MCAP like a
+    /// simulation, so `render`, `view` and `compare` read it.
+    Predict(PredictArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// Trained model: a run folder (`train --out`) or `builtin` (the shipped weights).
+    #[arg(long, default_value = "builtin")]
+    pub model: String,
+    /// Start from the inputs of a recording (its garment, motion, shape, material and frames)
+    /// to predict what it simulated; the flags below override them.
+    #[arg(long)]
+    pub config_from: Option<PathBuf>,
+    /// Garment: a library design, the built-in skirt (`skirt`, `default`) or a template OBJ
+    /// with UVs aligned to the default body in its canonical A-pose. Default: `default`.
+    #[arg(long)]
+    pub garment: Option<String>,
+    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
+    /// AMASS .npz file. Default: `walk`.
+    #[arg(long)]
+    pub motion: Option<String>,
+    /// SMPL-format .npz body model file: the one the model was trained on (default: the
+    /// licence-free default body).
+    #[arg(long)]
+    pub body_model: Option<PathBuf>,
+    /// Shape coefficients, comma-separated (default: zeros).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub betas: Option<Vec<f64>>,
+    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset; defaults 100, 0.2, 1e-5).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Output frames, blend-in and settle included (default: the whole motion).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Frames blending from the canonical pose into the motion. Default: 30.
+    #[arg(long)]
+    pub blend_frames: Option<usize>,
+    /// Frames holding the first frame after the blend. Default: 30.
+    #[arg(long)]
+    pub settle_frames: Option<usize>,
+    /// Euler steps from noise to data.
+    #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
+    pub steps: usize,
+    /// Time shift of the step schedule (1: uniform; above 1 spends more steps at high noise).
+    #[arg(long, default_value_t = 1.0)]
+    pub shift: f64,
+    /// Intersection guidance weight (0 turns it off).
+    #[arg(long, default_value_t = 5.0)]
+    pub guidance: f64,
+    /// Fraction of the steps done before guidance starts.
+    #[arg(long, default_value_t = 0.5)]
+    pub guidance_start: f64,
+    /// Seed of the initial noise.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Frames sampled together.
+    #[arg(long, default_value_t = 16)]
+    pub batch: usize,
+    /// Draw the initial noise per frame (default: one noise for the whole sequence, which
+    /// keeps frames coherent).
+    #[arg(long)]
+    pub per_frame_noise: bool,
+    /// After sampling, push vertices still inside the body out along its normal (D-Garment's
+    /// post-process; off by default, reported separately).
+    #[arg(long)]
+    pub resolve_penetration: bool,
+    /// Output recording (.mcap).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write every frame's garment (and body) as OBJ into this folder.
+    #[arg(long)]
+    pub obj_dir: Option<PathBuf>,
+    /// Also record the body vertices of every frame (large).
+    #[arg(long)]
+    pub body_vertices: bool,
+    /// Write the run's figures (`frames`, `finite`, `frames_per_s`, `wall_s`, `steps`,
+    /// `guidance`, `batch`, `E_c_percent`, `max_penetration_m`, `vertices`, `model`, ...) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Compute threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]

@@ -219,17 +219,36 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
 }
 
 fn write_frame_objs(dir: &Path, p: &Prepared, frame: &FrameOutput) -> Result<()> {
-    let k = frame.index;
+    write_objs(
+        dir,
+        frame.index,
+        &p.garment,
+        frame.garment,
+        &frame.body.vertices,
+        p.model.faces(),
+    )
+}
+
+/// Frame `k`'s garment (the template's mesh at `cloth`) and body as `garment_<k>.obj` and
+/// `body_<k>.obj` in `dir`.
+pub fn write_objs(
+    dir: &Path,
+    k: usize,
+    garment: &garments::Garment,
+    cloth: &[[f64; 3]],
+    body: &[[f64; 3]],
+    faces: &[[u32; 3]],
+) -> Result<()> {
     write_atomic(&dir.join(format!("garment_{k:04}.obj")), |w| {
-        garments::write_obj(w, &p.garment, Some(frame.garment))?;
+        garments::write_obj(w, garment, Some(cloth))?;
         Ok(())
     })?;
     write_atomic(&dir.join(format!("body_{k:04}.obj")), |w| {
         writeln!(w, "# body frame {k}")?;
-        for v in &frame.body.vertices {
+        for v in body {
             writeln!(w, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
         }
-        for f in p.model.faces() {
+        for f in faces {
             writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
         }
         Ok(())

@@ -258,6 +258,39 @@ impl Scorer {
             / n
     }
 
+    /// The seed of frame `frame`'s surface samples.
+    fn frame_seed(&self, frame: usize) -> u64 {
+        self.seed ^ (frame as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+    }
+
+    /// E_c and E_c_vertex: garment surface samples and vertices inside the body, %.
+    fn inside(
+        &self,
+        samples: &SurfaceSamples,
+        vertices: &[P3],
+        b: &BodySurface,
+        seed: u64,
+    ) -> (f64, f64) {
+        let sb = SurfaceSamples::new(b.vertices, b.triangles, self.samples, seed ^ 0x5A5A_5A5A);
+        let tb = sb.tree();
+        let inside = |p: &P3| {
+            let q = tb.nearest_one::<SquaredEuclidean>(p).item as usize;
+            dot(sub(*p, sb.points[q]), sb.normals[q]) < 0.0
+        };
+        let frac = |pts: &[P3]| {
+            100.0 * pts.iter().filter(|p| inside(p)).count() as f64 / pts.len().max(1) as f64
+        };
+        (frac(&samples.points), frac(vertices))
+    }
+
+    /// The collision terms alone, (E_c, E_c_vertex) in %, for a frame without ground truth
+    /// (a prediction): the same samples [`Self::frame`] scores them with.
+    pub fn collision(&self, pred: &[P3], body: &BodySurface, frame: usize) -> (f64, f64) {
+        let seed = self.frame_seed(frame);
+        let sp = SurfaceSamples::new(pred, &self.triangles, self.samples, seed);
+        self.inside(&sp, pred, body, seed)
+    }
+
     /// Scores one frame: `pred` against `gt` (same vertex order), `body` for E_c.
     pub fn frame(
         &self,
@@ -274,7 +307,7 @@ impl Scorer {
                 .map(|(a, b)| norm(sub(*a, *b)))
                 .sum::<f64>()
             / n;
-        let seed = self.seed ^ (frame as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let seed = self.frame_seed(frame);
         let sp = SurfaceSamples::new(pred, &self.triangles, self.samples, seed);
         // The same stream for both meshes: identical meshes get identical samples (E_CD = 0).
         let sg = SurfaceSamples::new(gt, &self.triangles, self.samples, seed);
@@ -295,20 +328,7 @@ impl Scorer {
                 .sqrt()
         };
         let (e_c, e_c_vertex) = match body {
-            Some(b) => {
-                let sb =
-                    SurfaceSamples::new(b.vertices, b.triangles, self.samples, seed ^ 0x5A5A_5A5A);
-                let tb = sb.tree();
-                let inside = |p: &P3| {
-                    let q = tb.nearest_one::<SquaredEuclidean>(p).item as usize;
-                    dot(sub(*p, sb.points[q]), sb.normals[q]) < 0.0
-                };
-                let frac = |pts: &[P3]| {
-                    100.0 * pts.iter().filter(|p| inside(p)).count() as f64
-                        / pts.len().max(1) as f64
-                };
-                (frac(&sp.points), frac(pred))
-            }
+            Some(b) => self.inside(&sp, pred, b, seed),
             None => (f64::NAN, f64::NAN),
         };
         Scores {

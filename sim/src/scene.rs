@@ -353,6 +353,18 @@ impl Scene {
         self.motion.with_blend_in(&canonical_a_pose(), self.blend())
     }
 
+    /// The body shape of output frame `k`: ramped from zero over the blend-in, then the
+    /// scene's.
+    pub fn frame_betas(&self, k: usize) -> Vec<f64> {
+        let blend = self.config.blend_frames;
+        let ramp = if blend == 0 {
+            1.0
+        } else {
+            (k as f64 / blend as f64).min(1.0)
+        };
+        self.betas.iter().map(|b| b * ramp).collect()
+    }
+
     /// Number of output frames.
     pub fn num_frames(&self) -> usize {
         let all = self.body_motion().len();
@@ -370,18 +382,10 @@ impl Scene {
         let motion = self.body_motion();
         let frames = self.num_frames();
         let target = model.shape(&self.betas)?;
-        let betas_at = |k: usize| -> Vec<f64> {
-            let ramp = if blend.blend_frames == 0 {
-                1.0
-            } else {
-                (k as f64 / blend.blend_frames as f64).min(1.0)
-            };
-            target.betas.iter().map(|b| b * ramp).collect()
-        };
         let mut posing = 0.0;
         let mut pose_frame = |k: usize| -> Result<(Vec<f64>, PosedBody)> {
             let t = Instant::now();
-            let betas = betas_at(k);
+            let betas = self.frame_betas(k);
             let shaped = if k >= blend.blend_frames {
                 target.clone()
             } else {

@@ -7,6 +7,7 @@ mod demo;
 mod drape_bench;
 mod garments_cmd;
 mod motions_cmd;
+mod predict;
 mod regress;
 mod render;
 mod simulate;
@@ -35,6 +36,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Garments { command } => garments_cmd::run(command),
         Command::Uv(args) => uv::run(&args),
         Command::Train(args) => train::run(&args),
+        Command::Predict(args) => predict::run(&args),
     }
 }
 

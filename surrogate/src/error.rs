@@ -94,6 +94,9 @@ pub enum Error {
         /// What is wrong, naming the key.
         message: String,
     },
+    /// Inputs or settings that cannot be used, said in words.
+    #[error("{0}")]
+    Invalid(String),
     /// An engine error (recordings, metrics).
     #[error(transparent)]
     Sim(#[from] sim::Error),

@@ -2,8 +2,8 @@
 //! encode, chart-aware readback and its transpose), the canonical frame, the two training
 //! targets (`displacement` and `lbs_residual`), the condition vector, and the training
 //! tensors a dataset becomes (`geometry`, `data`); the diffusion transformer (`model`), its
-//! training with rectified flow (`train`) and the Euler sampler (`sample`). Prediction of whole
-//! sequences with intersection guidance builds on these (issue 23).
+//! training with rectified flow (`train`), the Euler sampler (`sample`) and the prediction of
+//! whole sequences with intersection guidance (`predict`).
 //!
 //! Depends on `sim` for recordings and materials as plain data, never on the scene runner.
 #![warn(missing_docs)]
@@ -12,6 +12,7 @@ pub mod data;
 mod error;
 pub mod geometry;
 pub mod model;
+pub mod predict;
 pub mod sample;
 pub mod train;
 

@@ -8,7 +8,7 @@ mod trimesh;
 
 pub use analytic::{Cuboid, Kinematic, Plane, Sphere};
 pub use body::AnimatedMesh;
-pub use trimesh::StaticMesh;
+pub use trimesh::{MeshSurface, StaticMesh};
 
 use rayon::prelude::*;
 

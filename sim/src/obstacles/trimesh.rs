@@ -15,8 +15,9 @@ fn from_parry(p: Vector) -> Vec3 {
     Vec3::new(p.x as f64, p.y as f64, p.z as f64)
 }
 
-/// A closed triangle mesh with per-vertex velocities, queried for signed distances.
-pub(crate) struct MeshSurface {
+/// A closed triangle mesh with per-vertex velocities, queried for signed distances (the
+/// engine's body and props, and the surrogate's intersection guidance).
+pub struct MeshSurface {
     mesh: TriMesh,
     faces: Vec<[u32; 3]>,
     velocities: Vec<Vec3>,
@@ -24,6 +25,7 @@ pub(crate) struct MeshSurface {
 }
 
 impl MeshSurface {
+    /// A closed, outward-oriented mesh; `name` names it in errors.
     pub fn new(name: &str, vertices: &[Vec3], faces: &[[u32; 3]]) -> Result<Self> {
         let fail = |problem: String| Error::Obstacle {
             obstacle: name.to_string(),
@@ -62,6 +64,7 @@ impl MeshSurface {
         })
     }
 
+    /// Vertices of the mesh.
     pub fn num_vertices(&self) -> usize {
         self.velocities.len()
     }

@@ -131,13 +131,7 @@ impl TrainingTensors {
         let manifest: TensorManifest =
             serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
         let n = &manifest.normalization;
-        if n.targets.mean.len() != 3
-            || n.targets.std.len() != 3
-            || n.position_maps.mean.len() != 3
-            || n.position_maps.std.len() != 3
-            || n.conditions.mean.len() != manifest.condition_dim
-            || n.conditions.std.len() != manifest.condition_dim
-        {
+        if !manifest.normalization_fits() {
             return Err(file_error(
                 &path,
                 "normalization statistics of the wrong length",

@@ -10,6 +10,7 @@ mod tensors;
 pub use conditions::{Block, CONDITION_JOINTS, ConditionLayout};
 pub use frames::{Frames, TrainingTensors};
 pub use sequence::{Floor, Sequence, roundtrip_floor};
+pub(crate) use tensors::channels_first;
 pub use tensors::{
     Normalization, ShardInfo, SplitInfo, Stats, TemplateInfo, TensorManifest, TensorOptions,
     write_tensors,

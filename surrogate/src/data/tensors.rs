@@ -142,6 +142,19 @@ pub struct TensorManifest {
     pub normalization: Normalization,
 }
 
+impl TensorManifest {
+    /// Whether the normalization statistics have the lengths the layout asks for (a hand-edited
+    /// or foreign manifest may not).
+    pub fn normalization_fits(&self) -> bool {
+        let n = &self.normalization;
+        [&n.targets, &n.position_maps]
+            .iter()
+            .all(|s| s.mean.len() == 3 && s.std.len() == 3)
+            && n.conditions.mean.len() == self.condition_dim
+            && n.conditions.std.len() == self.condition_dim
+    }
+}
+
 /// One sample.
 struct Frame {
     condition: Vec<f32>,
@@ -152,7 +165,7 @@ struct Frame {
 }
 
 /// Channels-last `[f64; 3]` texels as channels-first f32 `[3, R, R]`.
-fn channels_first(image: &[[f64; 3]]) -> Vec<f32> {
+pub(crate) fn channels_first(image: &[[f64; 3]]) -> Vec<f32> {
     (0..3)
         .flat_map(|c| image.iter().map(move |t| t[c] as f32))
         .collect()

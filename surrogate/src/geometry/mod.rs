@@ -12,4 +12,4 @@ pub use atlas::{Atlas, RESOLUTIONS, TexelSample};
 pub use canonical::{Canonical, RootRemoval};
 pub use maps::GeometryImage;
 pub use skinning::{FOLDED_JOINTS, SMOOTHING_ROUNDS, Skinning};
-pub use target::{FrameBody, TargetKind, Targets};
+pub use target::{FrameBase, FrameBody, TargetKind, Targets};

@@ -61,11 +61,46 @@ pub struct Targets {
     shaped: Option<ShapedBody>,
 }
 
-/// The frame's canonical map and, for `lbs_residual`, the skinned template the target is
-/// measured from (`displacement` measures from the rest template itself, not copied).
-struct Base {
+/// What one frame's targets are measured from: its canonical map and the base positions
+/// (canonical) a target is added to, the template skinned to the frame's body for
+/// `lbs_residual` and the rest template for `displacement`. Made once per frame, it decodes
+/// any number of targets (the sampler's guidance decodes one per step).
+#[derive(Debug, Clone)]
+pub struct FrameBase {
     canonical: Canonical,
-    skinned: Option<Vec<[f64; 3]>>,
+    base: Vec<[f64; 3]>,
+}
+
+impl FrameBase {
+    /// The cloth (world, m) a per-vertex target stands for.
+    pub fn decode(&self, target: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        target
+            .iter()
+            .zip(&self.base)
+            .map(|(d, b)| {
+                self.canonical
+                    .to_world([b[0] + d[0], b[1] + d[1], b[2] + d[2]])
+            })
+            .collect()
+    }
+
+    /// The per-vertex target of cloth at `garment` (world, m).
+    pub fn encode(&self, garment: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        garment
+            .iter()
+            .zip(&self.base)
+            .map(|(x, b)| {
+                let c = self.canonical.to_canonical(*x);
+                [c[0] - b[0], c[1] - b[1], c[2] - b[2]]
+            })
+            .collect()
+    }
+
+    /// A world gradient with respect to a decoded vertex as the gradient with respect to its
+    /// target (decoding is a rigid map of base + target).
+    pub fn gradient_to_target(&self, world: [f64; 3]) -> [f64; 3] {
+        self.canonical.direction_to_canonical(world)
+    }
 }
 
 impl Targets {
@@ -99,7 +134,8 @@ impl Targets {
         self.kind
     }
 
-    fn base(&mut self, model: &BodyModel, body: FrameBody) -> Result<Base> {
+    /// The base of a frame (see [`FrameBase`]).
+    pub fn frame_base(&mut self, model: &BodyModel, body: FrameBody) -> Result<FrameBase> {
         if self.shaped.as_ref().is_none_or(|s| s.betas != body.betas) {
             self.shaped = Some(model.shape(body.betas)?);
         }
@@ -109,14 +145,15 @@ impl Targets {
         let pelvis = [j0[0] + t[0], j0[1] + t[1], j0[2] + t[2]];
         let p = &body.pose.pose;
         let canonical = Canonical::new(self.removal, [p[0], p[1], p[2]], pelvis, self.rest_pelvis);
-        let skinned = self.skinning.as_ref().map(|skinning| {
-            skinning
+        let base = match &self.skinning {
+            Some(skinning) => skinning
                 .pose(model, shaped, body.pose)
                 .into_iter()
                 .map(|q| canonical.to_canonical(q))
-                .collect()
-        });
-        Ok(Base { canonical, skinned })
+                .collect(),
+            None => self.template.clone(),
+        };
+        Ok(FrameBase { canonical, base })
     }
 
     /// The per-vertex target of a frame whose cloth is at `garment` (world, m).
@@ -126,15 +163,7 @@ impl Targets {
         body: FrameBody,
         garment: &[[f64; 3]],
     ) -> Result<Vec<[f64; 3]>> {
-        let base = self.base(model, body)?;
-        Ok(garment
-            .iter()
-            .zip(base.skinned.as_deref().unwrap_or(&self.template))
-            .map(|(x, b)| {
-                let c = base.canonical.to_canonical(*x);
-                [c[0] - b[0], c[1] - b[1], c[2] - b[2]]
-            })
-            .collect())
+        Ok(self.frame_base(model, body)?.encode(garment))
     }
 
     /// The cloth (world, m) a per-vertex target stands for.
@@ -144,15 +173,7 @@ impl Targets {
         body: FrameBody,
         target: &[[f64; 3]],
     ) -> Result<Vec<[f64; 3]>> {
-        let base = self.base(model, body)?;
-        Ok(target
-            .iter()
-            .zip(base.skinned.as_deref().unwrap_or(&self.template))
-            .map(|(d, b)| {
-                base.canonical
-                    .to_world([b[0] + d[0], b[1] + d[1], b[2] + d[2]])
-            })
-            .collect())
+        Ok(self.frame_base(model, body)?.decode(target))
     }
 }
 

@@ -12,6 +12,7 @@ use safetensors::tensor::{Dtype, TensorView};
 use super::batch::Batch;
 use super::checkpoint::write_atomic;
 use super::config::RunConfig;
+use crate::data::TensorManifest;
 use crate::error::{Result, file_error};
 use crate::model::Dit;
 
@@ -63,6 +64,68 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
         ));
     }
     Ok((config, model))
+}
+
+/// The run file holding the manifest of the tensors a model was trained on.
+pub const TENSORS_MANIFEST: &str = "tensors.json";
+
+/// A trained model ready to sample: its configuration, its EMA weights and the manifest of
+/// the tensors it was trained on (normalization, condition layout, target, templates).
+#[derive(Debug, Clone)]
+pub struct TrainedModel {
+    /// The run folder.
+    pub run: std::path::PathBuf,
+    /// `config.toml`.
+    pub config: RunConfig,
+    /// The network with the EMA weights.
+    pub model: Dit,
+    /// `tensors.json`.
+    pub data: TensorManifest,
+}
+
+impl TrainedModel {
+    /// Loads a run folder (see [`load_run`]) and its `tensors.json`, checked against the
+    /// configuration.
+    pub fn load(run: &Path, device: &Device) -> Result<Self> {
+        let (config, model) = load_run(run, device)?;
+        let path = run.join(TENSORS_MANIFEST);
+        let text = std::fs::read_to_string(&path).map_err(|e| file_error(&path, e))?;
+        let data: TensorManifest = serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
+        let m = &config.model;
+        let problem = if data.resolution != m.resolution {
+            Some(format!(
+                "resolution {} here, {} in config.toml",
+                data.resolution, m.resolution
+            ))
+        } else if data.condition_dim != m.condition_dim {
+            Some(format!(
+                "condition_dim {} here, {} in config.toml",
+                data.condition_dim, m.condition_dim
+            ))
+        } else if data.target != m.target {
+            Some(format!(
+                "target {} here, {} in config.toml",
+                data.target.name(),
+                m.target.name()
+            ))
+        } else if !data.normalization_fits() {
+            Some("normalization statistics of the wrong length".into())
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(file_error(
+                &path,
+                format!("does not fit the model: {problem}"),
+            ));
+        }
+        Ok(Self {
+            run: run.to_path_buf(),
+            config,
+            model,
+            data,
+        })
+    }
 }
 
 /// Writes the batch's inputs and `model`'s output on them to `path`.

@@ -3,7 +3,8 @@
 //! flow, docs/SURROGATE.md), AdamW with warm-up and cosine decay, global-norm clipping, an EMA
 //! of the weights, a fixed validation set, checkpoints every K steps and exact resume.
 //!
-//! A run folder holds `config.toml`, `log.jsonl`, `loss.png`, `checkpoint-<step>/`,
+//! A run folder holds `config.toml`, `tensors.json` (the manifest of the tensors trained on:
+//! what sampling needs of the data), `log.jsonl`, `loss.png`, `checkpoint-<step>/`,
 //! `model.safetensors` (EMA), `reference.safetensors` and `summary.json`, each written
 //! through a temporary name.
 
@@ -23,7 +24,7 @@ use serde::{Deserialize, Serialize};
 pub use batch::{Batch, generator, normal, validation_batches};
 pub use checkpoint::{RunState, write_atomic};
 pub use config::{RunConfig, TimeSampling, TrainConfig};
-pub use export::{load_run, save_reference, save_weights};
+pub use export::{TENSORS_MANIFEST, TrainedModel, load_run, save_reference, save_weights};
 pub use optim::{clip_global_norm, ema_decay, update_ema};
 
 use crate::data::TrainingTensors;
@@ -224,6 +225,9 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     }
     std::fs::create_dir_all(run).map_err(|e| file_error(run, e))?;
     write_atomic(&config_path, config.to_toml().as_bytes())?;
+    // What sampling needs of the data (normalization, condition layout, target, frames).
+    let manifest = serde_json::to_vec_pretty(&tensors.manifest).map_err(|e| file_error(run, e))?;
+    write_atomic(&run.join(TENSORS_MANIFEST), &manifest)?;
 
     let t = &config.training;
     let train_frames = tensors.frames("train")?;

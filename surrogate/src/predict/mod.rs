@@ -1,0 +1,472 @@
+//! Direct posing with a trained model: for every frame of a body sequence, the garment sampled
+//! from noise given the template's position map, the body shape, the pose window and the
+//! material, with intersection guidance (`guidance.rs`), decoded through the chart-aware
+//! readback to world vertices.
+//!
+//! Frames are independent (non-autoregressive), so a sequence is sampled in batches of
+//! frames. By default every frame starts from the same noise, which keeps neighbouring frames
+//! coherent; [`Noise::PerFrame`] draws it per frame. Same inputs and settings, same bits.
+
+mod guidance;
+
+pub use guidance::{
+    CONTACT_BAND_M, Clearance, Guidance, clearances, penalty_gradient, penetration, push_out,
+};
+
+use std::time::Instant;
+
+use burn::prelude::*;
+use motions::{BodyModel, Motion, ShapedBody};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use sim::Material;
+use sim::obstacles::MeshSurface;
+use sim::recording::TemplateArrays;
+
+use crate::data::{ConditionLayout, channels_first};
+use crate::error::{Error, Result};
+use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
+use crate::sample::{Conditioned, euler, time_grid};
+use crate::train::{TrainedModel, generator, normal};
+
+/// Euler steps by default (chosen from the steps sweep in docs/SURROGATE.md).
+pub const DEFAULT_STEPS: usize = 8;
+
+/// The random stream of the sampler's initial noise.
+pub const NOISE_STREAM: u64 = 3;
+
+/// Where the frames' initial noise comes from.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Noise {
+    /// One noise image for every frame of the sequence (temporal coherence).
+    #[default]
+    Shared,
+    /// A noise image per frame.
+    PerFrame,
+}
+
+/// How a sequence is sampled.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    /// Euler steps from noise to data.
+    pub steps: usize,
+    /// Time shift of the schedule (1: uniform).
+    pub shift: f64,
+    /// Intersection guidance.
+    pub guidance: Guidance,
+    /// Seed of the initial noise.
+    pub seed: u64,
+    /// Frames sampled together.
+    pub batch: usize,
+    /// Shared or per-frame initial noise.
+    pub noise: Noise,
+    /// Push the vertices still inside the body out after sampling (off by default; its
+    /// effect is reported apart from the model's).
+    pub resolve_penetration: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            steps: DEFAULT_STEPS,
+            shift: 1.0,
+            guidance: Guidance::default(),
+            seed: 0,
+            batch: 16,
+            noise: Noise::Shared,
+            resolve_penetration: false,
+        }
+    }
+}
+
+impl Settings {
+    /// Checks the values, naming the first bad one.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if !(1..=1000).contains(&self.steps) {
+            return Err(format!("steps = {} (1 to 1000)", self.steps));
+        }
+        if !(self.shift.is_finite() && self.shift > 0.0 && self.shift <= 100.0) {
+            return Err(format!("shift = {} (a number in (0, 100])", self.shift));
+        }
+        if !(1..=4096).contains(&self.batch) {
+            return Err(format!("batch = {} (1 to 4096 frames)", self.batch));
+        }
+        self.guidance.validate()
+    }
+}
+
+/// A body sequence to dress: the poses the body follows (blend-in included), its shape per
+/// frame and the cloth's material.
+#[derive(Debug, Clone, Copy)]
+pub struct BodySequence<'a> {
+    /// Poses and root translations.
+    pub motion: &'a Motion,
+    /// Body shape of every frame.
+    pub betas: &'a [Vec<f64>],
+    /// The cloth's material.
+    pub material: Material,
+}
+
+/// One predicted frame.
+#[derive(Debug, Clone)]
+pub struct PredictedFrame {
+    /// Frame index.
+    pub index: usize,
+    /// Garment vertices, m (after the push-out when it is on).
+    pub garment: Vec<[f64; 3]>,
+    /// Posed body vertices, m.
+    pub body: Vec<[f64; 3]>,
+    /// Vertices inside the body as sampled (before any push-out).
+    pub inside: usize,
+    /// Deepest vertex inside the body as sampled, m.
+    pub max_penetration_m: f64,
+    /// Vertices the push-out moved.
+    pub pushed: usize,
+}
+
+/// Where a prediction's time went, s: the wall time of the sampling (the frames' hand-over
+/// excluded), then per part summed over the batches sampled at once (so the parts may add up
+/// to more than the wall time).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    /// Wall time.
+    pub wall_s: f64,
+    /// The network's forward passes.
+    pub network_s: f64,
+    /// Guidance: decoding, body queries, gradients.
+    pub guidance_s: f64,
+    /// Conditions, bodies, noise, the final decode and the push-out.
+    pub other_s: f64,
+}
+
+/// A template made ready for a model: its geometry image at the model's resolution, its
+/// targets, and the network's fixed inputs.
+pub struct PreparedGarment {
+    image: GeometryImage,
+    targets: Targets,
+    /// Normalized position map, `[3, R, R]` flat.
+    position: Vec<f32>,
+    /// Loss mask, `[R, R]` flat.
+    mask: Vec<f32>,
+    /// Per texel, 1 over the sum of the readback weights that read it (0 if unread): spreads
+    /// a per-vertex gradient so that reading it back returns about the same values.
+    spread: Vec<f64>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl PreparedGarment {
+    /// Vertices of the template.
+    pub fn vertices(&self) -> usize {
+        self.image.vertices()
+    }
+
+    /// The template's triangles.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+}
+
+/// A trained model on a body model.
+pub struct Predictor<'a> {
+    trained: &'a TrainedModel,
+    body: &'a BodyModel,
+    layout: ConditionLayout,
+}
+
+/// Channels-first f32 `[3, R, R]` as channels-last texels, un-normalized by `mean`/`std`.
+fn texels(values: &[f32], mean: &[f64], std: &[f64]) -> Vec<[f64; 3]> {
+    let plane = values.len() / 3;
+    (0..plane)
+        .map(|k| std::array::from_fn(|c| values[c * plane + k] as f64 * std[c] + mean[c]))
+        .collect()
+}
+
+/// The posed bodies of frames, shaping only when the shape changes.
+fn posed_bodies(
+    model: &BodyModel,
+    seq: &BodySequence,
+    frames: &[usize],
+) -> Result<Vec<Vec<[f64; 3]>>> {
+    let mut shaped: Option<ShapedBody> = None;
+    frames
+        .iter()
+        .map(|&k| {
+            if shaped.as_ref().is_none_or(|s| s.betas != seq.betas[k]) {
+                shaped = Some(model.shape(&seq.betas[k])?);
+            }
+            let s = shaped.as_ref().expect("set above");
+            Ok(model.pose(s, &seq.motion.frames[k])?.vertices)
+        })
+        .collect()
+}
+
+impl<'a> Predictor<'a> {
+    /// A predictor of `trained` on `body`, which must be the body model it was trained on.
+    pub fn new(trained: &'a TrainedModel, body: &'a BodyModel) -> Result<Self> {
+        let data = &trained.data;
+        if data.body_model != body.name() {
+            return Err(Error::Invalid(format!(
+                "the model in {} was trained on the body model '{}', not '{}'",
+                trained.run.display(),
+                data.body_model,
+                body.name()
+            )));
+        }
+        let layout = ConditionLayout {
+            betas: body.num_betas(),
+            window: data.window,
+            material: data.material_ranges,
+        };
+        if layout.dim() != data.condition_dim {
+            return Err(Error::Invalid(format!(
+                "the model in {} takes {} condition values; '{}' with a window of {} gives {}",
+                trained.run.display(),
+                data.condition_dim,
+                body.name(),
+                data.window,
+                layout.dim()
+            )));
+        }
+        Ok(Self {
+            trained,
+            body,
+            layout,
+        })
+    }
+
+    /// Frames of pose history a frame's condition holds.
+    pub fn window(&self) -> usize {
+        self.layout.window
+    }
+
+    /// Prepares a template (rest positions on the canonical body, with UVs): its atlas and
+    /// position map are made here, so a template the model never saw is the normal case.
+    pub fn garment(&self, template: &TemplateArrays) -> Result<PreparedGarment> {
+        if template.uvs.is_empty() || template.uv_triangles.len() != template.triangles.len() {
+            return Err(Error::NoUvs);
+        }
+        let data = &self.trained.data;
+        let image = GeometryImage::of_template(template, data.resolution)?;
+        let targets = Targets::new(
+            self.body,
+            &template.positions,
+            &template.triangles,
+            data.target,
+            data.root,
+        )?;
+        let stats = &data.normalization.position_maps;
+        let position = channels_first(&image.encode(&template.positions)?)
+            .chunks(image.resolution().pow(2))
+            .enumerate()
+            .flat_map(|(c, plane)| {
+                let (m, s) = (stats.mean[c] as f32, stats.std[c] as f32);
+                plane.iter().map(move |v| (v - m) / s).collect::<Vec<_>>()
+            })
+            .collect();
+        let mask = image.loss_mask().iter().map(|&m| m as u8 as f32).collect();
+        let weights = image.read_transpose(&vec![[1.0; 3]; image.vertices()])?;
+        let spread = weights
+            .iter()
+            .map(|w| if w[0] > 1e-12 { 1.0 / w[0] } else { 0.0 })
+            .collect();
+        Ok(PreparedGarment {
+            image,
+            targets,
+            position,
+            mask,
+            spread,
+            triangles: template.triangles.clone(),
+        })
+    }
+
+    /// Predicts frames `0..frames` of `seq`, handing each to `on_frame` in order. Batches
+    /// are sampled on all of rayon's threads at once, one batch per thread: the network's
+    /// operations are too small to use a second core on their own (docs/BENCHMARKS.md).
+    pub fn predict(
+        &self,
+        garment: &mut PreparedGarment,
+        seq: &BodySequence,
+        frames: usize,
+        settings: &Settings,
+        on_frame: &mut dyn FnMut(&PredictedFrame) -> Result<()>,
+    ) -> Result<Timing> {
+        settings.validate().map_err(Error::Invalid)?;
+        let motion = seq.motion;
+        let window = self.layout.window;
+        if motion.len() <= window {
+            return Err(Error::Invalid(format!(
+                "the motion '{}' has {} frames; the model's pose window needs at least {}",
+                motion.name,
+                motion.len(),
+                window + 1
+            )));
+        }
+        if frames > motion.len() || frames > seq.betas.len() {
+            return Err(Error::Invalid(format!(
+                "{frames} frames asked of a motion of {} frames",
+                motion.len().min(seq.betas.len())
+            )));
+        }
+        let lanes = rayon::current_num_threads().max(1);
+        let mut timing = Timing::default();
+        let all: Vec<usize> = (0..frames).collect();
+        for round in all.chunks(settings.batch * lanes) {
+            let started = Instant::now();
+            let mut bases = Vec::with_capacity(round.len());
+            for &k in round {
+                let body = FrameBody {
+                    pose: &motion.frames[k],
+                    betas: &seq.betas[k],
+                };
+                bases.push(garment.targets.frame_base(self.body, body)?);
+            }
+            let garment: &PreparedGarment = garment;
+            let results = round
+                .chunks(settings.batch)
+                .zip(bases.chunks(settings.batch))
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|(chunk, bases)| self.sample_batch(garment, seq, chunk, bases, settings))
+                .collect::<Result<Vec<_>>>()?;
+            timing.wall_s += started.elapsed().as_secs_f64();
+            for (frames, t) in results {
+                timing.network_s += t.network_s;
+                timing.guidance_s += t.guidance_s;
+                timing.other_s += t.other_s;
+                for frame in &frames {
+                    on_frame(frame)?;
+                }
+            }
+        }
+        Ok(timing)
+    }
+
+    /// Samples one batch of frames (their bases given) and decodes it.
+    fn sample_batch(
+        &self,
+        garment: &PreparedGarment,
+        seq: &BodySequence,
+        chunk: &[usize],
+        bases: &[FrameBase],
+        settings: &Settings,
+    ) -> Result<(Vec<PredictedFrame>, Timing)> {
+        let started = Instant::now();
+        let data = &self.trained.data;
+        let (r, dim) = (data.resolution, data.condition_dim);
+        let plane = r * r;
+        let device = Device::flex();
+        let grid = time_grid(settings.steps, settings.shift);
+        let targets_stats = &data.normalization.targets;
+        let conditions_stats = &data.normalization.conditions;
+        let band = settings.guidance.band_m;
+        let mut timing = Timing::default();
+        let b = chunk.len();
+        let mut conditions = Vec::with_capacity(b * dim);
+        let mut noise = Vec::with_capacity(b * 3 * plane);
+        for &k in chunk {
+            let c = self
+                .layout
+                .vector(seq.motion, k, &seq.betas[k], &seq.material)?;
+            conditions.extend(
+                c.iter().enumerate().map(|(d, x)| {
+                    ((x - conditions_stats.mean[d]) / conditions_stats.std[d]) as f32
+                }),
+            );
+            let step = match settings.noise {
+                Noise::Shared => 0,
+                Noise::PerFrame => k as u64 + 1,
+            };
+            let mut rng = generator(settings.seed, NOISE_STREAM, step);
+            noise.extend((0..3 * plane).map(|_| normal(&mut rng)));
+        }
+        let posed = posed_bodies(self.body, seq, chunk)?;
+        let surfaces = posed
+            .iter()
+            .zip(chunk)
+            .map(|(vertices, k)| {
+                let v: Vec<sim::Vec3> = vertices.iter().map(|p| sim::Vec3::from(*p)).collect();
+                MeshSurface::new(&format!("body of frame {k}"), &v, self.body.faces())
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let repeat =
+            |one: &[f32]| -> Vec<f32> { (0..b).flat_map(|_| one.iter().copied()).collect() };
+        let tensor = |values: &[f32]| Tensor::<1>::from_floats(values, &device);
+        let field = Conditioned {
+            model: &self.trained.model,
+            position: tensor(&repeat(&garment.position)).reshape([b, 3, r, r]),
+            mask: tensor(&repeat(&garment.mask)).reshape([b, 1, r, r]),
+            conditions: tensor(&conditions).reshape([b, dim]),
+        };
+        let noise = tensor(&noise).reshape([b, 3, r, r]);
+        timing.other_s += started.elapsed().as_secs_f64();
+
+        let sampling = Instant::now();
+        let image = &garment.image;
+        let spread = &garment.spread;
+        let x = euler(&field, noise, &grid, &mut |k, s, x0_hat| {
+            if !settings.guidance.guides(k, settings.steps) {
+                return None;
+            }
+            let t = Instant::now();
+            let ds = s - grid[k + 1];
+            let scale = settings.guidance.weight.min(1.0 / ds);
+            let values: Vec<f32> = x0_hat.clone().try_into_vec_as().ok()?;
+            let mut correction = vec![0.0f32; values.len()];
+            for ((z, out), (base, surface)) in values
+                .chunks(3 * plane)
+                .zip(correction.chunks_mut(3 * plane))
+                .zip(bases.iter().zip(&surfaces))
+            {
+                let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                let world = base.decode(&image.read(&map).ok()?);
+                let gradient: Vec<[f64; 3]> =
+                    penalty_gradient(&clearances(surface, &world, band), band)
+                        .into_iter()
+                        .map(|g| base.gradient_to_target(g))
+                        .collect();
+                let spread_image = image.read_transpose(&gradient).ok()?;
+                for (c, out) in out.chunks_mut(plane).enumerate() {
+                    let factor = scale / targets_stats.std[c];
+                    for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
+                        *o = (factor * g[c] * w) as f32;
+                    }
+                }
+            }
+            timing.guidance_s += t.elapsed().as_secs_f64();
+            Some(tensor(&correction).reshape([b, 3, r, r]))
+        });
+        let values: Vec<f32> = x
+            .try_into_vec_as()
+            .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))?;
+        timing.network_s += sampling.elapsed().as_secs_f64() - timing.guidance_s;
+
+        let finishing = Instant::now();
+        let frames = values
+            .chunks(3 * plane)
+            .zip(bases.iter().zip(&surfaces))
+            .zip(chunk.iter().zip(posed))
+            .map(|((z, (base, surface)), (&index, body))| {
+                let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                let mut world = base.decode(&image.read(&map)?);
+                let c = clearances(surface, &world, band);
+                let (inside, max_penetration_m) = penetration(&c);
+                let pushed = if settings.resolve_penetration {
+                    push_out(&mut world, &c, band)
+                } else {
+                    0
+                };
+                Ok(PredictedFrame {
+                    index,
+                    garment: world,
+                    body,
+                    inside,
+                    max_penetration_m,
+                    pushed,
+                })
+            })
+            .collect::<Result<_>>()?;
+        timing.other_s += finishing.elapsed().as_secs_f64();
+        Ok((frames, timing))
+    }
+}
