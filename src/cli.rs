@@ -111,13 +111,13 @@ pub struct PredictArgs {
     #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
     pub steps: usize,
     /// Time shift of the step schedule (1: uniform; above 1 spends more steps at high noise).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
     pub shift: f64,
     /// Intersection guidance weight (0 turns it off).
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
     pub guidance: f64,
     /// Fraction of the steps done before guidance starts.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
     pub guidance_start: f64,
     /// Seed of the initial noise.
     #[arg(long, default_value_t = 0)]

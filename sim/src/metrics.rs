@@ -86,6 +86,24 @@ impl Scores {
     }
 }
 
+/// Jitter of a vertex sequence, cm: the mean over frames 1..n-1 and vertices of the second
+/// difference |x_{k+1} - 2 x_k + x_{k-1}| (0 for fewer than 3 frames). A simulation's own
+/// jitter is the reference a prediction's is read against.
+pub fn jitter(frames: &[Vec<P3>]) -> f64 {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for w in frames.windows(3) {
+        for ((a, b), c) in w[0].iter().zip(&w[1]).zip(&w[2]) {
+            sum += norm([
+                c[0] - 2.0 * b[0] + a[0],
+                c[1] - 2.0 * b[1] + a[1],
+                c[2] - 2.0 * b[2] + a[2],
+            ]);
+            count += 1;
+        }
+    }
+    100.0 * sum / count.max(1) as f64
+}
+
 /// Area-uniform samples of a mesh with their face normals.
 pub struct SurfaceSamples {
     /// Points, m.
@@ -348,6 +366,24 @@ impl Scorer {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn jitter_is_zero_for_uniform_motion_and_the_second_difference_otherwise() {
+        let line: Vec<Vec<P3>> = (0..5)
+            .map(|k| vec![[0.1 * k as f64, 0.0, 0.0]; 2])
+            .collect();
+        assert!(jitter(&line) < 1e-12);
+        // One vertex kicked 1 cm at frame 2 of 4: second differences 1, 2, 1 cm at frames 1-3.
+        let mut kicked = line.clone();
+        kicked[2][0][1] = 0.01;
+        let expected = (1.0 + 2.0 + 1.0) / 6.0;
+        assert!(
+            (jitter(&kicked) - expected).abs() < 1e-9,
+            "{}",
+            jitter(&kicked)
+        );
+        assert_eq!(jitter(&line[..2]), 0.0);
+    }
 
     /// A flat n x n grid patch of side 1 m in the x-z plane at height y.
     fn patch(n: usize, y: f64) -> (Vec<P3>, Vec<[u32; 3]>) {

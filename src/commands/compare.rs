@@ -3,7 +3,7 @@
 
 use anyhow::{Result, bail};
 use serde_json::json;
-use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores};
+use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores, jitter};
 use sim::recording::Recording;
 
 use crate::cli::CompareArgs;
@@ -82,6 +82,10 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         per_frame.push((k, s));
     }
     let mean = Scores::mean(&per_frame.iter().map(|(_, s)| *s).collect::<Vec<_>>());
+    let all = |r: &Recording| -> Vec<Vec<[f64; 3]>> {
+        r.garment[..frames].iter().map(|f| to64(f)).collect()
+    };
+    let (jitter_a, jitter_b) = (jitter(&all(&a)), jitter(&all(&b)));
     println!(
         "{} scored against {} ({} frames, every {FRAME_STRIDE}th):",
         args.b.display(),
@@ -91,6 +95,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     for ((name, unit), v) in UNITS.iter().zip(values(&mean)) {
         println!("  {name:<11} {v:10.4}  {unit}");
     }
+    println!(
+        "  jitter      {jitter_b:10.4}  cm mean second difference over all {frames} frames (A: {jitter_a:.4})"
+    );
     if let Some(path) = &args.json {
         let mut j = json!({
             "E_v": mean.E_v, "E_CD": mean.E_CD, "E_CD_cm": mean.E_CD_cm, "E_n": mean.E_n,
@@ -98,6 +105,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "E_d": mean.E_d, "frames_scored": per_frame.len(),
             "units": UNITS.iter().map(|(n, u)| (n.to_string(), json!(u))).collect::<serde_json::Map<_, _>>(),
             "samples_per_mesh": sim::metrics::SAMPLES, "seed": args.seed,
+            "jitter": jitter_b, "jitter_a": jitter_a, "frames": frames,
         });
         j["per_frame"] = per_frame
             .iter()

@@ -220,7 +220,11 @@ pub(crate) mod tests {
         let c = clearances(&body, &points, 0.003);
         assert_eq!(push_out(&mut points, &c, 0.003), 1);
         let d = clearances(&body, &points[..1], 0.01)[0].unwrap().distance;
-        assert!((d - 0.003).abs() < 1e-4, "{:?} is {d} m from the body", points[0]);
+        assert!(
+            (d - 0.003).abs() < 1e-4,
+            "{:?} is {d} m from the body",
+            points[0]
+        );
         assert_eq!(&points[1..], &before[1..]);
     }
 

@@ -30,7 +30,7 @@ use crate::sample::{Conditioned, euler, time_grid};
 use crate::train::{TrainedModel, generator, normal};
 
 /// Euler steps by default (chosen from the steps sweep in docs/SURROGATE.md).
-pub const DEFAULT_STEPS: usize = 8;
+pub const DEFAULT_STEPS: usize = 4;
 
 /// The random stream of the sampler's initial noise.
 pub const NOISE_STREAM: u64 = 3;

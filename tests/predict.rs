@@ -1,0 +1,320 @@
+//! End-to-end: `predict` as a user runs it with a model trained here on a tiny dataset: the
+//! recording reads back through `sim::recording` and every tool (`compare` scores it against
+//! the simulation of the same inputs, `render` draws it); the same seed gives the same bytes;
+//! the JSON has its keys; bad inputs are named, exit 1, and leave nothing at `--out`.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use common::{fails, json, ok};
+use sim::recording::Recording;
+
+/// One skirt sequence on walk (train) and one on arm_swing (test), 12 frames each.
+const SPEC: &str = r#"
+name = "predict-test"
+seed = 5
+[sequence]
+frames = 12
+blend_frames = 3
+settle_frames = 1
+shapes_per_motion = 1
+draws_per_shape = 1
+[solver]
+substeps = 1
+max_iterations = 4
+[[garments]]
+name = "skirt"
+split = "train"
+[[motions]]
+source = "walk"
+split = "train"
+[[motions]]
+source = "arm_swing"
+split = "test"
+[splits]
+test_motion = 1
+"#;
+
+/// A tiny model, trained for a few steps: enough to have weights of the right shapes.
+const CONFIG: &str = r#"
+[model]
+patch = 4
+width = 16
+depth = 1
+heads = 2
+mlp_ratio = 2.0
+condition_tokens = 2
+[training]
+steps = 10
+batch = 2
+lr = 1e-3
+warmup_steps = 2
+log_every = 5
+val_every = 10
+checkpoint_every = 10
+val_frames = 4
+"#;
+
+struct Fixture {
+    dir: PathBuf,
+    run: PathBuf,
+    /// The simulated test sequence.
+    truth: PathBuf,
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The dataset, its tensors (32 x 32, lbs_residual) and a trained run, made once.
+fn fixture() -> &'static Fixture {
+    static FIXTURE: OnceLock<Fixture> = OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let dir =
+            std::env::temp_dir().join(format!("dit-garment-predict-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (spec, data) = (dir.join("spec.toml"), dir.join("data"));
+        let (tensors, run, config) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
+        std::fs::write(&spec, SPEC).unwrap();
+        std::fs::write(&config, CONFIG).unwrap();
+        ok(&["synth", "--spec", s(&spec), "--out", s(&data), "--quiet"]);
+        ok(&[
+            "dataset",
+            "tensors",
+            s(&data),
+            "--out",
+            s(&tensors),
+            "--resolution",
+            "32",
+            "--target",
+            "lbs_residual",
+            "--quiet",
+        ]);
+        ok(&[
+            "train",
+            "--data",
+            s(&tensors),
+            "--out",
+            s(&run),
+            "--config",
+            s(&config),
+            "--threads",
+            "1",
+            "--quiet",
+        ]);
+        let truth = std::fs::read_dir(data.join("sequences"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                p.file_name()
+                    .unwrap()
+                    .to_str()
+                    .unwrap()
+                    .starts_with("test_motion")
+            })
+            .expect("the test sequence");
+        Fixture { dir, run, truth }
+    })
+}
+
+fn predict(out: &Path, extra: &[&str]) -> String {
+    let f = fixture();
+    let mut args = vec![
+        "predict",
+        "--model",
+        s(&f.run),
+        "--config-from",
+        s(&f.truth),
+        "--out",
+        s(out),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    ok(&args)
+}
+
+#[test]
+fn a_prediction_is_a_recording_every_tool_reads_and_the_same_seed_gives_the_same_bytes() {
+    let f = fixture();
+    let dir = tempfile::tempdir().unwrap();
+    let (out, report) = (dir.path().join("p.mcap"), dir.path().join("p.json"));
+    let printed = predict(
+        &out,
+        &["--json", s(&report), "--steps", "3", "--batch", "5"],
+    );
+    assert!(printed.contains("predict: 'skirt'"), "{printed}");
+    let j = json(&report);
+    for key in [
+        "frames",
+        "finite",
+        "frames_per_s",
+        "wall_s",
+        "steps",
+        "guidance",
+        "batch",
+        "E_c_percent",
+        "max_penetration_m",
+        "vertices",
+        "model",
+    ] {
+        assert!(!j[key].is_null(), "{key} missing from {j}");
+    }
+    assert_eq!(j["frames"], 12);
+    assert_eq!(j["steps"], 3);
+    assert_eq!(j["finite"], true);
+    assert_eq!(j["template_seen_in_training"], true);
+
+    // It reads back with the simulation's template and body poses, and the metadata says
+    // what made it.
+    let predicted = Recording::read(&out).unwrap();
+    let truth = Recording::read(&f.truth).unwrap();
+    assert_eq!(predicted.garment.len(), 12);
+    assert_eq!(predicted.template.triangles, truth.template.triangles);
+    assert_eq!(predicted.poses, truth.poses);
+    let meta = predicted.meta.unwrap();
+    assert_eq!(meta.garment, "skirt");
+    let cmp = dir.path().join("cmp.json");
+    ok(&["compare", s(&f.truth), s(&out), "--json", s(&cmp)]);
+    let scores = json(&cmp);
+    assert!(scores["E_v"].as_f64().unwrap() > 0.0, "{scores}");
+    assert!(scores["jitter"].as_f64().unwrap().is_finite(), "{scores}");
+    let pictures = dir.path().join("pictures");
+    ok(&[
+        "render",
+        s(&out),
+        "--out",
+        s(&pictures),
+        "--frames",
+        "0,6",
+        "--size",
+        "96",
+    ]);
+    assert!(std::fs::read_dir(&pictures).unwrap().count() > 0);
+
+    // Same seed and settings, same bytes; another seed, another garment.
+    let again = dir.path().join("again.mcap");
+    predict(&again, &["--steps", "3", "--batch", "5"]);
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+    let other = dir.path().join("other.mcap");
+    predict(&other, &["--steps", "3", "--batch", "5", "--seed", "1"]);
+    let other = Recording::read(&other).unwrap();
+    assert_ne!(other.garment[8], predicted.garment[8]);
+}
+
+#[test]
+fn per_frame_noise_and_the_push_out_change_what_they_should() {
+    let dir = tempfile::tempdir().unwrap();
+    let shared = dir.path().join("shared.mcap");
+    predict(&shared, &["--steps", "2", "--guidance", "0"]);
+    let per_frame = dir.path().join("per_frame.mcap");
+    predict(
+        &per_frame,
+        &["--steps", "2", "--guidance", "0", "--per-frame-noise"],
+    );
+    let (a, b) = (
+        Recording::read(&shared).unwrap(),
+        Recording::read(&per_frame).unwrap(),
+    );
+    // Frame 0's noise is the shared one's only by chance; later frames differ.
+    assert_ne!(a.garment[5], b.garment[5]);
+
+    let pushed = dir.path().join("pushed.json");
+    let out = dir.path().join("pushed.mcap");
+    predict(
+        &out,
+        &[
+            "--steps",
+            "2",
+            "--guidance",
+            "0",
+            "--resolve-penetration",
+            "--json",
+            s(&pushed),
+        ],
+    );
+    let plain = dir.path().join("plain.json");
+    predict(
+        &dir.path().join("plain.mcap"),
+        &["--steps", "2", "--guidance", "0", "--json", s(&plain)],
+    );
+    let (with, without) = (json(&pushed), json(&plain));
+    // The push-out moves exactly the vertices that were inside, and only then.
+    let inside = without["max_verts_inside"].as_u64().unwrap();
+    assert_eq!(without["pushed_vertices"], 0);
+    assert_eq!(with["pushed_vertices"].as_u64().unwrap() > 0, inside > 0);
+}
+
+#[test]
+fn bad_inputs_are_named_and_leave_nothing() {
+    let f = fixture();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.mcap");
+    let base = |extra: &[&str]| -> String {
+        let mut args = vec!["predict", "--out", s(&out), "--quiet"];
+        args.extend_from_slice(extra);
+        let e = fails(&args);
+        assert!(!out.exists(), "{} was written", out.display());
+        e
+    };
+    let run = s(&f.run);
+    let truth = s(&f.truth);
+    let e = base(&["--model", s(&dir.path().join("nowhere"))]);
+    assert!(e.contains("not a run folder"), "{e}");
+    let e = base(&["--model", run, "--config-from", truth, "--steps", "0"]);
+    assert!(e.contains("steps = 0"), "{e}");
+    let e = base(&["--model", run, "--config-from", truth, "--guidance", "-1"]);
+    assert!(e.contains("guidance weight = -1"), "{e}");
+    let e = base(&[
+        "--model",
+        run,
+        "--motion",
+        "walk:duration=0.04",
+        "--blend-frames",
+        "0",
+        "--settle-frames",
+        "0",
+    ]);
+    assert!(e.contains("pose window needs at least 3"), "{e}");
+
+    // A template without UVs.
+    let obj = dir.path().join("flat.obj");
+    std::fs::write(
+        &obj,
+        "v -0.2 1.0 0.2\nv 0.2 1.0 0.2\nv 0.2 1.2 0.2\nv -0.2 1.2 0.2\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let e = base(&["--model", run, "--garment", s(&obj), "--frames", "4"]);
+    assert!(e.contains("UVs") && e.contains("flat.obj"), "{e}");
+
+    // A model whose weights are missing, and one whose data manifest does not fit it.
+    let broken = f.dir.join("broken-run");
+    let _ = std::fs::remove_dir_all(&broken);
+    std::fs::create_dir_all(&broken).unwrap();
+    for file in ["config.toml", "tensors.json"] {
+        std::fs::copy(f.run.join(file), broken.join(file)).unwrap();
+    }
+    let e = base(&["--model", s(&broken), "--config-from", truth]);
+    assert!(
+        e.contains("model.safetensors") && e.contains("missing"),
+        "{e}"
+    );
+    std::fs::copy(
+        f.run.join("model.safetensors"),
+        broken.join("model.safetensors"),
+    )
+    .unwrap();
+    let manifest = std::fs::read_to_string(broken.join("tensors.json")).unwrap();
+    std::fs::write(
+        broken.join("tensors.json"),
+        manifest.replace("\"resolution\": 32", "\"resolution\": 64"),
+    )
+    .unwrap();
+    let e = base(&["--model", s(&broken), "--config-from", truth]);
+    assert!(
+        e.contains("tensors.json") && e.contains("resolution 64"),
+        "{e}"
+    );
+}
