@@ -69,6 +69,68 @@ pub enum Command {
     /// noise (Euler, rectified flow) with intersection guidance, recorded as MCAP like a
     /// simulation, so `render`, `view` and `compare` read it.
     Predict(PredictArgs),
+    /// Score a model over a dataset's held-out splits with the paper's metrics, beside
+    /// baselines that need no learning (lbs, lbs_nearest, floor, rest): JSON and a report
+    /// with the paper's tables and pictures; resumable, per-sequence results cached.
+    Evaluate(EvaluateArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct EvaluateArgs {
+    /// Trained model: a run folder, `builtin` (the shipped weights) or `none` (baselines only).
+    #[arg(long, default_value = "builtin")]
+    pub model: String,
+    /// Dataset folder (`synth --out`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Splits to score, comma-separated (those without sequences are skipped).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "test,test_garment,test_motion,test_shape,test_material"
+    )]
+    pub splits: Vec<String>,
+    /// Euler steps of the model's sampler.
+    #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
+    pub steps: usize,
+    /// Guidance weight of the `model` rows (`model_no_guidance` uses 0).
+    #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
+    pub guidance: f64,
+    /// Fraction of the steps done before guidance starts.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
+    pub guidance_start: f64,
+    /// Seed of the sampler's noise.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Frames sampled together.
+    #[arg(long, default_value_t = 16)]
+    pub batch: usize,
+    /// Baselines, comma-separated: lbs, lbs_nearest, floor, rest.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "lbs,lbs_nearest,floor,rest"
+    )]
+    pub baselines: Vec<String>,
+    /// At most K sequences per split (the first K in the manifest's order).
+    #[arg(long)]
+    pub max_sequences: Option<usize>,
+    /// SMPL-format .npz body model the dataset was made with (default: the default body).
+    #[arg(long)]
+    pub body_model: Option<PathBuf>,
+    /// Write the scores here (`splits`, `sequences`, `model`, `settings`, `units`, ...).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write the report here: README.md, index.html, pictures; per-sequence results are
+    /// cached in DIR/sequences and reused by a rerun with the same settings.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Compute threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]

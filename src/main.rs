@@ -8,6 +8,8 @@ mod dataset_dir;
 mod inputs;
 mod output;
 mod pictures;
+mod prediction;
+mod report;
 mod run;
 
 use std::process::ExitCode;

@@ -477,3 +477,54 @@ pub fn write_view(
     }
     write_atomic(out, |w| Ok(render::viewer::write_viewer(w, &sequences)?))
 }
+
+/// A sheet of three rows over `frames`: the simulation, the prediction, and the prediction
+/// coloured by its per-vertex error against the simulation (the report's pictures).
+pub fn comparison_sheet(
+    truth: &Path,
+    predicted: &Path,
+    model: &BodyModel,
+    frames: &[usize],
+    size: u32,
+    out: &Path,
+) -> Result<()> {
+    let a = Sequence::open(truth, model, true)?;
+    let b = Sequence::open(predicted, model, true)?;
+    let n = a.frames().min(b.frames());
+    if let Some(&k) = frames.iter().find(|&&k| k >= n) {
+        bail!(
+            "frame {k} is past the end of {} ({n} frames)",
+            predicted.display()
+        );
+    }
+    let colouring = Colouring::new(ColourBy::Error, &b, Some(truth))?;
+    let scale = colouring.default_scale();
+    let meshes_a = frames
+        .iter()
+        .map(|&k| a.meshes(k))
+        .collect::<Result<Vec<_>>>()?;
+    let meshes_b = frames
+        .iter()
+        .map(|&k| b.meshes(k))
+        .collect::<Result<Vec<_>>>()?;
+    let all: Vec<&FrameMeshes> = meshes_a.iter().chain(&meshes_b).collect();
+    let bounds = framing_size(&all).context("no finite vertex to frame")?;
+    let mut renderer = Renderer::new(size, size, 2);
+    let view = View::ThreeQuarter;
+    let mut tiles = Vec::new();
+    for (&k, m) in frames.iter().zip(&meshes_a) {
+        let image = picture(&mut renderer, view, &a, m, &bounds, None);
+        tiles.push((image, format!("simulated {k}")));
+    }
+    for (&k, m) in frames.iter().zip(&meshes_b) {
+        let image = picture(&mut renderer, view, &b, m, &bounds, None);
+        tiles.push((image, format!("predicted {k}")));
+    }
+    for (&k, m) in frames.iter().zip(&meshes_b) {
+        let values = colouring.values(&b, k, m)?;
+        let colours = Some((values.as_slice(), scale, colouring.label()));
+        let image = picture(&mut renderer, view, &b, m, &bounds, colours);
+        tiles.push((image, format!("error {k}")));
+    }
+    write_png(out, &render::contact_sheet(&tiles, frames.len()))
+}

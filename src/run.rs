@@ -20,6 +20,20 @@ use crate::cli::SceneArgs;
 use crate::inputs;
 use crate::output::write_atomic;
 
+/// Sets the compute threads of a `--threads` flag (all cores when absent).
+pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(threads) = threads {
+        if threads == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .context("setting the thread count")?;
+    }
+    Ok(())
+}
+
 /// The configuration the flags ask for: the defaults, or a `--config` file, or the
 /// configuration a `--config-from` recording carries, with every given flag over it. Not
 /// validated here: [`Scene::new`] validates it once (and `--print-config` before printing).

@@ -1,7 +1,9 @@
-//! End-to-end: `predict` as a user runs it with a model trained here on a tiny dataset: the
-//! recording reads back through `sim::recording` and every tool (`compare` scores it against
-//! the simulation of the same inputs, `render` draws it); the same seed gives the same bytes;
-//! the JSON has its keys; bad inputs are named, exit 1, and leave nothing at `--out`.
+//! End-to-end: `predict` and `evaluate` as a user runs them with a model trained here on a
+//! tiny dataset. A prediction's recording reads back through `sim::recording` and every tool
+//! (`compare` scores it against the simulation of the same inputs, `render` draws it); the same
+//! seed gives the same bytes; the JSON has its keys; bad inputs are named, exit 1, and leave
+//! nothing at `--out`. `evaluate` ranks the UV floor below every other baseline, scores the
+//! ground truth zero, writes its report and reuses its cache.
 
 mod common;
 
@@ -317,4 +319,156 @@ fn bad_inputs_are_named_and_leave_nothing() {
         e.contains("tensors.json") && e.contains("resolution 64"),
         "{e}"
     );
+}
+
+#[test]
+fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
+    let f = fixture();
+    let data = f.dir.join("data");
+    let dir = tempfile::tempdir().unwrap();
+    let scores = dir.path().join("baselines.json");
+    ok(&[
+        "evaluate",
+        "--model",
+        "none",
+        "--data",
+        s(&data),
+        "--splits",
+        "test_motion",
+        "--json",
+        s(&scores),
+        "--quiet",
+    ]);
+    let j = json(&scores);
+    let rows = &j["splits"]["test_motion"];
+    let keys = [
+        "E_v",
+        "E_CD",
+        "E_CD_cm",
+        "E_n",
+        "E_c",
+        "E_c_vertex",
+        "E_b",
+        "E_s",
+        "E_d",
+        "jitter",
+        "stretch_p99",
+        "inside_percent",
+        "fps",
+        "sequences",
+        "frames_scored",
+    ];
+    for method in ["lbs", "lbs_nearest", "floor", "rest"] {
+        for key in keys {
+            assert!(
+                rows[method][key].is_number(),
+                "{method}.{key} missing: {rows}"
+            );
+            assert!(j["units"][key].is_string(), "no unit for {key}");
+        }
+        assert_eq!(rows[method]["sequences"], 1);
+    }
+    assert!(rows["model"].is_null(), "no model was asked for");
+    let e_v = |m: &str| rows[m]["E_v"].as_f64().unwrap();
+    for other in ["lbs", "lbs_nearest", "rest"] {
+        assert!(
+            e_v("floor") < e_v(other),
+            "floor {} >= {other} {}",
+            e_v("floor"),
+            e_v(other)
+        );
+    }
+    assert_eq!(j["sequences"].as_array().unwrap().len(), 1);
+
+    // The ground truth, scored as a prediction, scores zero.
+    let seq = surrogate::data::Sequence::read(&f.truth).unwrap();
+    let body = motions::BodyModel::default_body();
+    let truth = surrogate::evaluate::Truth::new(&seq, &body, 0).unwrap();
+    let perfect = truth.score(&truth.ground_truth(), 1.0);
+    let sc = perfect.scores;
+    for (name, v) in [
+        ("E_v", sc.E_v),
+        ("E_CD", sc.E_CD),
+        ("E_n", sc.E_n),
+        ("E_b", sc.E_b),
+    ] {
+        assert!(v.abs() < 1e-9, "{name} = {v} for the ground truth");
+    }
+    assert!(sc.E_s.abs() < 1e-9 && sc.E_d.abs() < 1e-9, "{sc:?}");
+
+    // With the model: its rows, the report, and the cache on a rerun.
+    let report = dir.path().join("report");
+    let args = [
+        "evaluate",
+        "--model",
+        s(&f.run),
+        "--data",
+        s(&data),
+        "--splits",
+        "test_motion",
+        "--steps",
+        "2",
+        "--baselines",
+        "lbs,floor",
+        "--json",
+        s(&scores),
+        "--report",
+        s(&report),
+        "--quiet",
+    ];
+    let first = ok(&args);
+    assert!(first.contains("(0 reused"), "{first}");
+    let j = json(&scores);
+    for method in ["model", "model_no_guidance", "lbs", "floor"] {
+        assert!(
+            j["splits"]["test_motion"][method]["E_v"].is_number(),
+            "{method}: {j}"
+        );
+    }
+    assert!(j["splits"]["test_motion"]["rest"].is_null());
+    let md = std::fs::read_to_string(report.join("README.md")).unwrap();
+    assert!(
+        md.contains("Guidance ablation") && md.contains("One unseen factor"),
+        "{md}"
+    );
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(html.contains("<table>") && html.contains("data:image/png;base64,"));
+    assert!(
+        report
+            .join("pictures/test_motion_median/sheet.png")
+            .is_file()
+    );
+    assert!(
+        report
+            .join("pictures/test_motion_median/view.html")
+            .is_file()
+    );
+    let again = ok(&args);
+    assert!(again.contains("(1 reused"), "{again}");
+    assert_eq!(json(&scores)["splits"], j["splits"]);
+
+    let e = fails(&[
+        "evaluate",
+        "--model",
+        "none",
+        "--data",
+        s(&data),
+        "--baselines",
+        "knn",
+        "--json",
+        s(&scores),
+    ]);
+    assert!(e.contains("unknown baseline 'knn'"), "{e}");
+    let e = fails(&[
+        "evaluate",
+        "--model",
+        "none",
+        "--data",
+        s(&data),
+        "--splits",
+        "nope",
+        "--json",
+        s(&scores),
+    ]);
+    assert!(e.contains("no finished sequences"), "{e}");
 }

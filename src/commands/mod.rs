@@ -5,6 +5,7 @@ mod compare;
 mod dataset_cmd;
 mod demo;
 mod drape_bench;
+mod evaluate;
 mod garments_cmd;
 mod motions_cmd;
 mod predict;
@@ -37,6 +38,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Uv(args) => uv::run(&args),
         Command::Train(args) => train::run(&args),
         Command::Predict(args) => predict::run(&args),
+        Command::Evaluate(args) => evaluate::run(&args),
     }
 }
 

@@ -2,68 +2,24 @@
 //! recorded as MCAP through the engine's recording writer (with the model and sampler
 //! settings in its metadata), with a progress bar and a JSON summary.
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use serde::Serialize;
 use serde_json::json;
-use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer};
-use sim::recording::{Channels, FrameRecord, SequenceMeta, SequenceWriter, TemplateArrays};
-use sim::scene::FPS;
+use sim::recording::TemplateArrays;
 use surrogate::burn::prelude::Device;
 use surrogate::predict::{BodySequence, Guidance, Noise, Predictor, Settings};
 use surrogate::train::TrainedModel;
 
 use crate::cli::{ModelArgs, PredictArgs, SceneArgs};
-use crate::output::{write_atomic, write_json};
-use crate::run::{prepare, resolve_config, write_objs};
-
-/// Where `--model builtin` looks: the weights shipped in the repository.
-fn builtin_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("surrogate/weights")
-}
-
-/// The run folder `--model` names.
-fn model_dir(name: &str) -> Result<PathBuf> {
-    if name == "builtin" {
-        let dir = builtin_dir();
-        if !dir.join("model.safetensors").is_file() {
-            bail!(
-                "no built-in model: {} holds no model.safetensors (this build ships none); \
-                 train one (`dit-garment train`) and pass --model RUN",
-                dir.display()
-            );
-        }
-        return Ok(dir);
-    }
-    let dir = PathBuf::from(name);
-    if !dir.is_dir() {
-        bail!("--model {name}: not a run folder (or `builtin`)");
-    }
-    Ok(dir)
-}
-
-/// The recording's metadata: a garment sequence's, plus what made the prediction.
-#[derive(Serialize)]
-struct PredictedMeta {
-    #[serde(flatten)]
-    sequence: SequenceMeta,
-    predicted: serde_json::Value,
-}
+use crate::output::write_json;
+use crate::prediction::{PredictionStats, Recorded, model_dir, record_prediction};
+use crate::run::{prepare, resolve_config, set_threads};
 
 pub fn run(args: &PredictArgs) -> Result<()> {
     let started = Instant::now();
-    if let Some(threads) = args.threads {
-        if threads == 0 {
-            bail!("--threads must be at least 1");
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build_global()
-            .context("setting the thread count")?;
-    }
+    set_threads(args.threads)?;
     let settings = Settings {
         steps: args.steps,
         shift: args.shift,
@@ -148,10 +104,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         "template_seen_in_training": seen,
     });
     let software = format!("dit-garment {} predict", env!("CARGO_PKG_VERSION"));
-    let meta = PredictedMeta {
-        sequence: scene.sequence_meta(&garment.name, model.name(), &software),
-        predicted,
-    };
+    let meta = scene.sequence_meta(&garment.name, model.name(), &software);
 
     let bar = ProgressBar::new(frames as u64).with_style(
         ProgressStyle::with_template(
@@ -162,55 +115,32 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     if args.quiet {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    let scorer = Scorer::new(&template.positions, &template.triangles, 0);
-    let (mut finite, mut max_penetration, mut max_inside, mut pushed) = (true, 0.0f64, 0, 0);
-    let mut collision = Vec::new();
-    let mut timing = Default::default();
     let prepared_s = started.elapsed().as_secs_f64();
-    write_atomic(&args.out, |w| {
-        let channels = Channels {
-            template: Some(&template),
-            body_faces: args.body_vertices.then(|| model.faces()),
-            joints: false,
-            stats: false,
-        };
-        let mut rec = SequenceWriter::new(w, &meta, channels, FPS)?;
-        timing = predictor.predict(&mut ready, &body, frames, &settings, &mut |frame| {
-            let k = frame.index;
-            finite &= frame.garment.iter().flatten().all(|v| v.is_finite());
-            max_penetration = max_penetration.max(frame.max_penetration_m);
-            max_inside = max_inside.max(frame.inside);
-            pushed += frame.pushed;
-            if k % FRAME_STRIDE == 0 {
-                let surface = BodySurface {
-                    vertices: &frame.body,
-                    triangles: model.faces(),
-                };
-                collision.push(scorer.collision(&frame.garment, &surface, k));
-            }
-            let record = FrameRecord {
-                index: k,
-                garment: Some(&frame.garment),
-                pose: &motion.frames[k].pose,
-                transl: motion.frames[k].transl,
-                betas: &betas[k],
-                body_vertices: args.body_vertices.then_some(frame.body.as_slice()),
-                joints: None,
-                stats: None,
-            };
-            rec.write_frame(&record).map_err(surrogate::Error::from)?;
-            if let Some(dir) = &args.obj_dir {
-                write_objs(dir, k, garment, &frame.garment, &frame.body, model.faces())
-                    .map_err(|e| surrogate::Error::Invalid(format!("{e:#}")))?;
-            }
-            bar.inc(1);
-            Ok(())
-        })?;
-        rec.finish()?;
-        Ok(())
-    })
-    .with_context(|| format!("predicting into {}", args.out.display()))?;
+    let recorded = Recorded {
+        predictor: &predictor,
+        garment: &mut ready,
+        template: &template,
+        body,
+        frames: 0..frames,
+        settings: &settings,
+        meta: &meta,
+        predicted: &predicted,
+        faces: model.faces(),
+        body_vertices: args.body_vertices,
+        obj: args.obj_dir.as_deref().map(|d| (d, garment.as_ref())),
+        bar: &bar,
+    };
+    let stats = record_prediction(&args.out, recorded)
+        .with_context(|| format!("predicting into {}", args.out.display()))?;
     bar.finish_and_clear();
+    let PredictionStats {
+        finite,
+        max_penetration_m: max_penetration,
+        max_inside,
+        pushed,
+        collision,
+        timing,
+    } = stats;
 
     let sampling_s = timing.wall_s;
     let frames_per_s = frames as f64 / sampling_s.max(1e-9);

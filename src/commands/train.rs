@@ -7,6 +7,7 @@ use surrogate::data::TrainingTensors;
 use surrogate::train::{Event, RunConfig, TrainOptions, train};
 
 use crate::cli::TrainArgs;
+use crate::run::set_threads;
 
 /// The configuration the flags ask for: the defaults (or, resuming, the run's own
 /// `config.toml`), then `--config`, then `--steps`, `--batch`, `--seed`.
@@ -30,15 +31,7 @@ fn resolve(args: &TrainArgs) -> Result<RunConfig> {
 }
 
 pub fn run(args: &TrainArgs) -> Result<()> {
-    if let Some(threads) = args.threads {
-        if threads == 0 {
-            bail!("--threads must be at least 1");
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build_global()
-            .context("setting the thread count")?;
-    }
+    set_threads(args.threads)?;
     if let Some(m) = args.minutes
         && !(m.is_finite() && m > 0.0)
     {

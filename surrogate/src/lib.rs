@@ -10,6 +10,7 @@
 
 pub mod data;
 mod error;
+pub mod evaluate;
 pub mod geometry;
 pub mod model;
 pub mod predict;

@@ -101,6 +101,22 @@ impl Skinning {
         triangles: &[[u32; 3]],
         rounds: usize,
     ) -> Result<Self> {
+        Self::build(model, template, triangles, rounds, true)
+    }
+
+    /// Plain nearest-body-vertex skinning: the legs not folded, no smoothing (the
+    /// `lbs_nearest` baseline, which turns skirts into trousers).
+    pub fn nearest(model: &BodyModel, template: &[[f64; 3]]) -> Result<Self> {
+        Self::build(model, template, &[], 0, false)
+    }
+
+    fn build(
+        model: &BodyModel,
+        template: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        rounds: usize,
+        fold: bool,
+    ) -> Result<Self> {
         let shaped = model.shape(&[])?;
         let canonical = FramePose {
             pose: canonical_a_pose(),
@@ -117,7 +133,11 @@ impl Skinning {
             let mut w = [0.0; NUM_JOINTS];
             for &(j, x) in model.skinning_weights(b as usize) {
                 let j = j as usize;
-                w[if FOLDED_JOINTS.contains(&j) { 0 } else { j }] += x;
+                w[if fold && FOLDED_JOINTS.contains(&j) {
+                    0
+                } else {
+                    j
+                }] += x;
             }
             dense.push(w);
             body_vertex.push(b);

@@ -280,14 +280,14 @@ impl<'a> Predictor<'a> {
         })
     }
 
-    /// Predicts frames `0..frames` of `seq`, handing each to `on_frame` in order. Batches
+    /// Predicts `frames` of `seq`, handing each to `on_frame` in order. Batches
     /// are sampled on all of rayon's threads at once, one batch per thread: the network's
     /// operations are too small to use a second core on their own (docs/BENCHMARKS.md).
     pub fn predict(
         &self,
         garment: &mut PreparedGarment,
         seq: &BodySequence,
-        frames: usize,
+        frames: std::ops::Range<usize>,
         settings: &Settings,
         on_frame: &mut dyn FnMut(&PredictedFrame) -> Result<()>,
     ) -> Result<Timing> {
@@ -302,15 +302,16 @@ impl<'a> Predictor<'a> {
                 window + 1
             )));
         }
-        if frames > motion.len() || frames > seq.betas.len() {
+        if frames.end > motion.len() || frames.end > seq.betas.len() {
             return Err(Error::Invalid(format!(
-                "{frames} frames asked of a motion of {} frames",
+                "frames up to {} asked of a motion of {} frames",
+                frames.end,
                 motion.len().min(seq.betas.len())
             )));
         }
         let lanes = rayon::current_num_threads().max(1);
         let mut timing = Timing::default();
-        let all: Vec<usize> = (0..frames).collect();
+        let all: Vec<usize> = frames.collect();
         for round in all.chunks(settings.batch * lanes) {
             let started = Instant::now();
             let mut bases = Vec::with_capacity(round.len());

@@ -1,0 +1,307 @@
+//! `dit-garment evaluate`: a model scored over a dataset's held-out splits beside the
+//! baselines, per sequence in parallel, each sequence's result cached in the report folder
+//! (a rerun with the same settings reuses it); JSON and the report (`crate::report`).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use motions::BodyModel;
+use rayon::prelude::*;
+use serde_json::{Value, json};
+use sim::dataset::ManifestRecord;
+use surrogate::burn::prelude::Device;
+use surrogate::data::Sequence;
+use surrogate::evaluate::baselines::{self, Baseline, FloorMaps};
+use surrogate::evaluate::{Method, Truth, UNITS};
+use surrogate::geometry::{RootRemoval, TargetKind};
+use surrogate::predict::{BodySequence, Guidance, Predictor, Settings};
+use surrogate::train::TrainedModel;
+
+use crate::cli::EvaluateArgs;
+use crate::dataset_dir::{DatasetDir, read_jsonl, sha256_file};
+use crate::inputs;
+use crate::output::write_json;
+use crate::prediction::model_dir;
+use crate::report::{self, Pictures, SequenceResult, aggregate};
+use crate::run::set_threads;
+
+/// What evaluating a sequence needs.
+pub struct EvalContext<'a> {
+    pub data: &'a Path,
+    pub body: &'a BodyModel,
+    pub predictor: Option<&'a Predictor<'a>>,
+    pub settings: Settings,
+    pub baselines: Vec<(Method, Baseline)>,
+    pub fingerprint: Value,
+}
+
+fn baseline(name: &str, floor: FloorMaps) -> Result<(Method, Baseline)> {
+    Ok(match name {
+        "lbs" => (Method::Lbs, Baseline::Lbs),
+        "lbs_nearest" => (Method::LbsNearest, Baseline::LbsNearest),
+        "floor" => (Method::Floor, Baseline::Floor(floor)),
+        "rest" => (Method::Rest, Baseline::Rest),
+        other => bail!("unknown baseline '{other}' (lbs, lbs_nearest, floor, rest)"),
+    })
+}
+
+/// Scores one sequence with every method.
+fn evaluate_one(c: &EvalContext, record: &ManifestRecord) -> Result<SequenceResult> {
+    let file = record
+        .file
+        .as_deref()
+        .with_context(|| format!("sequence {} has no recording", record.id))?;
+    let path = c.data.join(file);
+    if let Some(expected) = &record.sha256 {
+        let (sha, _) = sha256_file(&path)?;
+        if &sha != expected {
+            bail!(
+                "{}: does not match the manifest's checksum (damaged or replaced)",
+                path.display()
+            );
+        }
+    }
+    let seq = Sequence::read(&path)?;
+    let truth = Truth::new(&seq, c.body, 0).with_context(|| path.display().to_string())?;
+    let frames = truth.frames();
+    let mut methods = BTreeMap::new();
+    for &(method, b) in &c.baselines {
+        let started = Instant::now();
+        let predicted = baselines::predict(b, c.body, &seq, frames)?;
+        let fps = frames.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
+        methods.insert(method, truth.score(&predicted, fps));
+    }
+    if let Some(predictor) = c.predictor {
+        let mut garment = predictor.garment(&seq.template)?;
+        let motion = seq.motion()?;
+        let body = BodySequence {
+            motion: &motion,
+            betas: &seq.betas,
+            material: seq.meta.material,
+        };
+        let range = frames[0]..frames[frames.len() - 1] + 1;
+        for (method, weight) in [
+            (Method::Model, c.settings.guidance.weight),
+            (Method::ModelNoGuidance, 0.0),
+        ] {
+            let settings = Settings {
+                guidance: Guidance {
+                    weight,
+                    ..c.settings.guidance
+                },
+                ..c.settings
+            };
+            let mut predicted = Vec::with_capacity(frames.len());
+            let timing =
+                predictor.predict(&mut garment, &body, range.clone(), &settings, &mut |f| {
+                    predicted.push(f.garment.clone());
+                    Ok(())
+                })?;
+            let fps = frames.len() as f64 / timing.wall_s.max(1e-9);
+            methods.insert(method, truth.score(&predicted, fps));
+        }
+    }
+    Ok(SequenceResult {
+        id: record.id.clone(),
+        split: record.split.clone(),
+        garment: record.garment.clone(),
+        motion: record.motion.clone(),
+        file: file.to_string(),
+        settings: c.fingerprint.clone(),
+        methods,
+        simulation: truth.simulation(),
+    })
+}
+
+/// A cached result made with the same settings, if any.
+fn cached(path: &Path, fingerprint: &Value) -> Option<SequenceResult> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let r: SequenceResult = serde_json::from_str(&text).ok()?;
+    (&r.settings == fingerprint).then_some(r)
+}
+
+pub fn run(args: &EvaluateArgs) -> Result<()> {
+    set_threads(args.threads)?;
+    if args.json.is_none() && args.report.is_none() {
+        bail!("nothing to write: give --json F and/or --report DIR");
+    }
+    let settings = Settings {
+        steps: args.steps,
+        guidance: Guidance {
+            weight: args.guidance,
+            start: args.guidance_start,
+            ..Guidance::default()
+        },
+        seed: args.seed,
+        batch: args.batch,
+        ..Settings::default()
+    };
+    if let Err(e) = settings.validate() {
+        bail!("bad sampler settings: {e}");
+    }
+    let trained = match args.model.as_str() {
+        "none" => None,
+        name => {
+            let dir = model_dir(name)?;
+            Some(
+                TrainedModel::load(&dir, &Device::flex())
+                    .with_context(|| format!("loading the model in {}", dir.display()))?,
+            )
+        }
+    };
+    let body = inputs::body_model(args.body_model.as_deref())?;
+    let predictor = trained
+        .as_ref()
+        .map(|t| Predictor::new(t, &body))
+        .transpose()?;
+    let floor = trained.as_ref().map_or(
+        FloorMaps {
+            resolution: 64,
+            target: TargetKind::LbsResidual,
+            root: RootRemoval::Heading,
+        },
+        |t| FloorMaps {
+            resolution: t.data.resolution,
+            target: t.data.target,
+            root: t.data.root,
+        },
+    );
+    let baselines = args
+        .baselines
+        .iter()
+        .filter(|b| !b.is_empty())
+        .map(|b| baseline(b, floor))
+        .collect::<Result<Vec<_>>>()?;
+
+    let dir = DatasetDir::new(&args.data);
+    let manifest = dir.manifest();
+    let all: Vec<ManifestRecord> = read_jsonl(&manifest)
+        .with_context(|| format!("reading the dataset in {}", args.data.display()))?;
+    let mut records = Vec::new();
+    for split in &args.splits {
+        let mut of_split: Vec<ManifestRecord> = all
+            .iter()
+            .filter(|r| r.ok() && &r.split == split)
+            .cloned()
+            .collect();
+        if let Some(k) = args.max_sequences {
+            of_split.truncate(k);
+        }
+        records.extend(of_split);
+    }
+    if records.is_empty() {
+        bail!(
+            "{}: no finished sequences in the splits {}",
+            manifest.display(),
+            args.splits.join(", ")
+        );
+    }
+    let weights = trained
+        .as_ref()
+        .map(|t| sha256_file(&t.run.join("model.safetensors")))
+        .transpose()?
+        .map(|(sha, _)| sha);
+    let model_json = match &trained {
+        Some(t) => json!({
+            "run": t.run, "weights_sha256": weights, "target": t.data.target.name(),
+            "resolution": t.data.resolution, "config": t.config,
+            "trained_on": t.data.templates.iter().map(|t| &t.name).collect::<Vec<_>>(),
+        }),
+        None => Value::Null,
+    };
+    let fingerprint = json!({
+        "model": model_json, "steps": settings.steps, "guidance": settings.guidance,
+        "seed": settings.seed, "batch": settings.batch,
+        "baselines": baselines.iter().map(|(m, _)| m.name()).collect::<Vec<_>>(),
+        "floor": {"resolution": floor.resolution, "target": floor.target.name()},
+        "software": env!("CARGO_PKG_VERSION"),
+    });
+    let context = EvalContext {
+        data: &args.data,
+        body: &body,
+        predictor: predictor.as_ref(),
+        settings,
+        baselines,
+        fingerprint: fingerprint.clone(),
+    };
+    let cache = args.report.as_ref().map(|r| r.join("sequences"));
+    let bar = ProgressBar::new(records.len() as u64).with_style(
+        ProgressStyle::with_template(
+            "evaluating [{bar:30}] {pos}/{len} sequences ({elapsed}, eta {eta}) {msg}",
+        )?
+        .progress_chars("=> "),
+    );
+    if args.quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let started = Instant::now();
+    let results = records
+        .par_iter()
+        .map(|record| {
+            let file = cache
+                .as_ref()
+                .map(|d| d.join(format!("{}.json", record.id)));
+            if let Some(hit) = file.as_deref().and_then(|f| cached(f, &fingerprint)) {
+                bar.inc(1);
+                return Ok((hit, true));
+            }
+            let result = evaluate_one(&context, record)
+                .with_context(|| format!("evaluating sequence {}", record.id))?;
+            if let Some(f) = &file {
+                write_json(f, &result)?;
+            }
+            bar.set_message(record.id.clone());
+            bar.inc(1);
+            Ok((result, false))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    bar.finish_and_clear();
+    let reused = results.iter().filter(|(_, hit)| *hit).count();
+    let results: Vec<SequenceResult> = results.into_iter().map(|(r, _)| r).collect();
+    let (splits, simulation) = aggregate(&results);
+    let units: serde_json::Map<String, Value> = UNITS
+        .iter()
+        .map(|(k, u)| (k.to_string(), json!(u)))
+        .collect();
+    let settings_json = json!({
+        "steps": settings.steps, "guidance": settings.guidance.weight,
+        "guidance_start": settings.guidance.start, "seed": settings.seed,
+        "batch": settings.batch, "threads": rayon::current_num_threads(),
+        "splits": args.splits, "max_sequences": args.max_sequences,
+        "data": args.data, "protocol": "motion frames (after blend-in and settle); every 5th scored, averaged over frames then sequences; jitter over all motion frames",
+    });
+    let output = json!({
+        "splits": splits,
+        "simulation": simulation,
+        "sequences": results,
+        "model": model_json,
+        "settings": settings_json,
+        "units": units,
+        "paper": report::paper_numbers(),
+    });
+    if let Some(path) = &args.json {
+        write_json(path, &output)?;
+    }
+    if let Some(dir) = &args.report {
+        let pictures = Pictures {
+            data: &args.data,
+            body: &body,
+            predictor: predictor.as_ref(),
+            settings,
+        };
+        report::write(dir, &output, &results, &pictures)
+            .with_context(|| format!("writing the report in {}", dir.display()))?;
+    }
+    println!(
+        "evaluate: {} sequences of {} splits in {:.1} s ({} reused from the cache)",
+        results.len(),
+        splits.len(),
+        started.elapsed().as_secs_f64(),
+        reused
+    );
+    report::print_table(&splits);
+    Ok(())
+}
