@@ -110,17 +110,22 @@ fn evaluate_one(c: &EvalContext, record: &ManifestRecord) -> Result<SequenceResu
         garment: record.garment.clone(),
         motion: record.motion.clone(),
         file: file.to_string(),
-        settings: c.fingerprint.clone(),
+        settings: sequence_fingerprint(&c.fingerprint, record),
         methods,
         simulation: truth.simulation(),
     })
 }
 
-/// A cached result made with the same settings, if any.
-fn cached(path: &Path, fingerprint: &Value) -> Option<SequenceResult> {
+/// The settings of one sequence's rows: the run's, and the recording they scored.
+fn sequence_fingerprint(run: &Value, record: &ManifestRecord) -> Value {
+    json!({"run": run, "file": record.file, "sha256": record.sha256, "split": record.split})
+}
+
+/// A cached result made with the same settings on the same recording, if any.
+fn cached(path: &Path, run: &Value, record: &ManifestRecord) -> Option<SequenceResult> {
     let text = std::fs::read_to_string(path).ok()?;
     let r: SequenceResult = serde_json::from_str(&text).ok()?;
-    (&r.settings == fingerprint).then_some(r)
+    (r.settings == sequence_fingerprint(run, record) && r.split == record.split).then_some(r)
 }
 
 pub fn run(args: &EvaluateArgs) -> Result<()> {
@@ -181,7 +186,12 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let all: Vec<ManifestRecord> = read_jsonl(&manifest)
         .with_context(|| format!("reading the dataset in {}", args.data.display()))?;
     let mut records = Vec::new();
+    let mut splits_asked: Vec<&String> = Vec::new();
     for split in &args.splits {
+        if splits_asked.contains(&split) {
+            continue;
+        }
+        splits_asked.push(split);
         let mut of_split: Vec<ManifestRecord> = all
             .iter()
             .filter(|r| r.ok() && &r.split == split)
@@ -191,6 +201,16 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
             of_split.truncate(k);
         }
         records.extend(of_split);
+    }
+    if let Some(bad) = records
+        .iter()
+        .find(|r| r.id.is_empty() || r.id.contains(['/', '\\']) || r.id.starts_with('.'))
+    {
+        bail!(
+            "{}: sequence id '{}' is not a plain file name",
+            manifest.display(),
+            bad.id
+        );
     }
     if records.is_empty() {
         bail!(
@@ -217,6 +237,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         "seed": settings.seed, "batch": settings.batch,
         "baselines": baselines.iter().map(|(m, _)| m.name()).collect::<Vec<_>>(),
         "floor": {"resolution": floor.resolution, "target": floor.target.name()},
+        "body_model": body.name(), "threads": rayon::current_num_threads(),
         "software": env!("CARGO_PKG_VERSION"),
     });
     let context = EvalContext {
@@ -244,7 +265,10 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
             let file = cache
                 .as_ref()
                 .map(|d| d.join(format!("{}.json", record.id)));
-            if let Some(hit) = file.as_deref().and_then(|f| cached(f, &fingerprint)) {
+            if let Some(hit) = file
+                .as_deref()
+                .and_then(|f| cached(f, &fingerprint, record))
+            {
                 bar.inc(1);
                 return Ok((hit, true));
             }

@@ -83,12 +83,15 @@ pub struct MethodScores {
     pub fps: f64,
     /// Frames scored.
     pub frames_scored: usize,
+    /// Frames predicted (every motion frame), the count `fps` is measured over.
+    #[serde(default)]
+    pub frames_predicted: usize,
     /// Sequences averaged (1 for a sequence's own row).
     pub sequences: usize,
 }
 
 /// Every key of a [`MethodScores`] with its unit.
-pub const UNITS: [(&str, &str); 15] = [
+pub const UNITS: [(&str, &str); 16] = [
     ("E_v", "cm"),
     ("E_CD", "100 m^2 (squared distances)"),
     ("E_CD_cm", "cm"),
@@ -110,18 +113,20 @@ pub const UNITS: [(&str, &str); 15] = [
     ("fps", "frames/s"),
     ("sequences", "count"),
     ("frames_scored", "count"),
+    ("frames_predicted", "count"),
 ];
 
 impl MethodScores {
-    /// The mean of sequences' rows (fps: frames over summed time; counts summed).
+    /// The mean of sequences' rows (fps: frames predicted over their summed time; counts
+    /// summed).
     pub fn mean(rows: &[MethodScores]) -> MethodScores {
         let n = rows.len().max(1) as f64;
         let scores: Vec<Scores> = rows.iter().map(|r| r.scores).collect();
         let avg = |f: fn(&MethodScores) -> f64| rows.iter().map(f).sum::<f64>() / n;
-        let frames: f64 = rows.iter().map(|r| r.frames_scored as f64).sum();
+        let frames: f64 = rows.iter().map(|r| r.frames_predicted as f64).sum();
         let time: f64 = rows
             .iter()
-            .map(|r| r.frames_scored as f64 / r.fps.max(1e-12))
+            .map(|r| r.frames_predicted as f64 / r.fps.max(1e-12))
             .sum();
         MethodScores {
             scores: Scores::mean(&scores),
@@ -130,6 +135,7 @@ impl MethodScores {
             inside_percent: avg(|r| r.inside_percent),
             fps: if time > 0.0 { frames / time } else { 0.0 },
             frames_scored: rows.iter().map(|r| r.frames_scored).sum(),
+            frames_predicted: rows.iter().map(|r| r.frames_predicted).sum(),
             sequences: rows.iter().map(|r| r.sequences).sum(),
         }
     }
@@ -266,6 +272,7 @@ impl<'a> Truth<'a> {
             inside_percent: inside / self.scored.len().max(1) as f64,
             fps,
             frames_scored: self.scored.len(),
+            frames_predicted: predicted.len(),
             sequences: 1,
         }
     }
