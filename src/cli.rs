@@ -4,8 +4,13 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-/// Garment dynamics on SMPL-compatible bodies: bodies and motions today; the projective-dynamics
-/// ground-truth engine and the DiT-Garment surrogate build on them.
+/// Garment dynamics on SMPL-compatible bodies: a projective-dynamics cloth engine with exact
+/// frictional contact (the ground truth), and DiT-Garment, a diffusion transformer in UV space
+/// trained on its data to pose garments directly.
+///
+/// Start with `demo --out DIR`: the engine simulates the default skirt through `walk`, the
+/// shipped surrogate predicts the same sequence, and the two are compared. Datasets: `synth`,
+/// `dataset`; the surrogate: `dataset tensors`, `train`, `predict`, `evaluate`.
 ///
 /// Units everywhere: metres, seconds, radians (axis-angle); y up, the body facing +z.
 #[derive(Debug, Parser)]
@@ -18,12 +23,15 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run the main job on built-in defaults: the default garment on the default body through
-    /// the built-in `walk` motion, written as an MCAP sequence, OBJ frames and a JSON summary.
+    /// the built-in `walk` motion, simulated by the engine and predicted by the shipped
+    /// surrogate, compared (MCAP recordings, OBJ frames, pictures, a viewer page, a JSON
+    /// summary).
     Demo(DemoArgs),
     /// Simulate a garment on a body through a motion and record the sequence as MCAP.
     Simulate(SimulateArgs),
-    /// The standard drape scene of the peer benchmarks (1 m cloth onto a sphere), timed and
-    /// measured like ../shared/peers.
+    /// The standard drape scene of cloth benchmarks (a 1 m cloth dropped onto a 0.3 m sphere for
+    /// 2 s), timed and measured with the keys Newton, MuJoCo and Taichi runs of the same scene
+    /// report (docs/BENCHMARKS.md has the side-by-side figures).
     DrapeBench(DrapeBenchArgs),
     /// Run the physics regression suite: one row per scenario (expected, measured,
     /// tolerance, pass).
@@ -340,7 +348,12 @@ pub struct DemoArgs {
     /// Write an OBJ of every K-th frame (0 = none).
     #[arg(long, default_value_t = 15)]
     pub obj_every: usize,
-    /// Also write the numbers (frames, fps, height, timing) to this JSON file.
+    /// The surrogate that predicts the same sequence: `builtin` (the shipped model), a run
+    /// folder of `train`, or `none` (simulate only). (`--model` is the body model, as in
+    /// `simulate`.)
+    #[arg(long, default_value = "builtin")]
+    pub surrogate: String,
+    /// Also write the numbers (frames, fps, timing, the prediction's scores) to this JSON file.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
@@ -450,14 +463,14 @@ pub struct DrapeBenchArgs {
     /// Iterations per substep.
     #[arg(long, default_value_t = 5)]
     pub iterations: usize,
-    /// Turns cloth-cloth contact on (off by default: the peers' scene has none).
+    /// Turns cloth-cloth contact on (off by default: the benchmark scene has none).
     #[arg(long)]
     pub self_contact: bool,
-    /// Folder for the final vertices (`final_n<N>.npy`, z-up, grid order i*n+j as the peers)
+    /// Folder for the final vertices (`final_n<N>.npy`, z-up, grid order i*n+j, as the other simulators' runs write them)
     /// and the result JSON.
     #[arg(long, default_value = "out/drape-bench")]
     pub out: PathBuf,
-    /// Also write the result (the peers' keys: `n`, `t_sim_2s_wall_s`, `verts_inside_sphere`,
+    /// Also write the result (the benchmark's keys: `n`, `t_sim_2s_wall_s`, `verts_inside_sphere`,
     /// `max_edge_stretch`, `p99_edge_stretch`, `drape_proxy`, `lowest_z_m`, `finite`) here.
     #[arg(long)]
     pub json: Option<PathBuf>,

@@ -528,3 +528,61 @@ pub fn comparison_sheet(
     }
     write_png(out, &render::contact_sheet(&tiles, frames.len()))
 }
+
+/// The simulation, the prediction and its error against the simulation side by side, every
+/// `every`-th frame, as a looping GIF at the recordings' speed (tiles of `size` pixels).
+pub fn comparison_gif(
+    truth: &Path,
+    predicted: &Path,
+    model: &BodyModel,
+    every: usize,
+    size: u32,
+    out: &Path,
+) -> Result<()> {
+    let a = Sequence::open(truth, model, true)?;
+    let b = Sequence::open(predicted, model, true)?;
+    let every = every.max(1);
+    let keep: Vec<usize> = (0..a.frames().min(b.frames())).step_by(every).collect();
+    let probes = (0..8)
+        .map(|i| keep[i * (keep.len() - 1) / 7])
+        .flat_map(|k| [a.meshes(k), b.meshes(k)])
+        .collect::<Result<Vec<_>>>()?;
+    let bounds = framing_size(&probes.iter().collect::<Vec<_>>())
+        .with_context(|| format!("{}: no finite vertex to frame", predicted.display()))?;
+    let colouring = Colouring::new(ColourBy::Error, &b, Some(truth))?;
+    let scale = colouring.default_scale();
+    let fps = a.recording.meta.as_ref().map_or(30.0, |m| m.fps) as f32 / every as f32;
+    let mut renderer = Renderer::new(size, size, 2);
+    let view = View::ThreeQuarter;
+    let mut sheet = |k: usize| -> Result<RgbImage> {
+        let (ma, mb) = (a.meshes(k)?, b.meshes(k)?);
+        let values = colouring.values(&b, k, &mb)?;
+        let colours = Some((values.as_slice(), scale, colouring.label()));
+        let tiles = [
+            (
+                picture(&mut renderer, view, &a, &ma, &bounds, None),
+                "simulated",
+            ),
+            (
+                picture(&mut renderer, view, &b, &mb, &bounds, None),
+                "predicted",
+            ),
+            (
+                picture(&mut renderer, view, &b, &mb, &bounds, colours),
+                "error",
+            ),
+        ]
+        .map(|(image, label)| (image, format!("{label} {k}")));
+        Ok(render::contact_sheet(&tiles, 3))
+    };
+    let first = sheet(keep[0])?;
+    write_atomic(out, |w| {
+        let mut gif = render::GifWriter::new(w, first.width(), first.height(), fps)?;
+        gif.push(&first)?;
+        for &k in &keep[1..] {
+            gif.push(&sheet(k)?)?;
+        }
+        gif.finish()?;
+        Ok(())
+    })
+}

@@ -1,20 +1,22 @@
 //! A surrogate's prediction as the commands share it: the model folder `--model` names, and a
 //! predicted sequence recorded through the engine's `SequenceWriter` (atomically, with the
-//! model and sampler settings in the metadata), shared by `predict` and `evaluate`.
+//! model and sampler settings in the metadata), shared by `predict`, `demo` and `evaluate`.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
-use indicatif::ProgressBar;
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
+use serde_json::json;
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer};
 use sim::recording::{Channels, FrameRecord, SequenceMeta, SequenceWriter, TemplateArrays};
 use sim::scene::FPS;
 use surrogate::predict::{BodySequence, Predictor, PreparedGarment, Settings, Timing};
+use surrogate::train::TrainedModel;
 
 use crate::output::write_atomic;
-use crate::run::write_objs;
+use crate::run::{Prepared, write_objs};
 
 /// Where `--model builtin` looks: the weights shipped in the repository.
 pub fn builtin_dir() -> PathBuf {
@@ -145,4 +147,110 @@ pub fn record_prediction(out: &Path, r: Recorded) -> Result<PredictionStats> {
         Ok(())
     })?;
     Ok(stats)
+}
+
+/// A prepared scene to predict: the model, the sampler and where the recording goes.
+pub struct SceneRequest<'a> {
+    pub trained: &'a TrainedModel,
+    /// The model as the recording's metadata names it (its folder).
+    pub model_name: &'a str,
+    pub settings: &'a Settings,
+    pub out: &'a Path,
+    pub obj_dir: Option<&'a Path>,
+    pub body_vertices: bool,
+    pub quiet: bool,
+    /// The recording's `software` entry.
+    pub software: &'a str,
+}
+
+/// What predicting a scene measured.
+pub struct ScenePrediction {
+    pub frames: usize,
+    pub vertices: usize,
+    /// Whether the model was trained on this template.
+    pub seen: bool,
+    pub stats: PredictionStats,
+    /// Frames over the sampling's wall time (the template's preparation excluded).
+    pub frames_per_s: f64,
+    /// Preparing the template (atlas, position map, skinning) and the body sequence, s.
+    pub garment_s: f64,
+    /// Mean E_c and E_c_vertex of every 5th frame, %.
+    pub e_c: f64,
+    pub e_c_vertex: f64,
+}
+
+/// Predicts every frame of a prepared scene (the body poses and shapes the engine would
+/// simulate) and records it, with a progress bar unless `quiet`.
+pub fn predict_scene(prepared: &Prepared, r: &SceneRequest) -> Result<ScenePrediction> {
+    let started = std::time::Instant::now();
+    let (model, garment, scene) = (&prepared.model, &prepared.garment, &prepared.scene);
+    let predictor = Predictor::new(r.trained, model)?;
+    let template = TemplateArrays {
+        positions: garment.positions.clone(),
+        triangles: garment.triangles.clone(),
+        uvs: garment.uvs.clone(),
+        uv_triangles: garment.uv_triangles.clone(),
+    };
+    let mut ready = predictor
+        .garment(&template)
+        .with_context(|| format!("garment '{}'", garment.name))?;
+    let motion = scene.body_motion();
+    let frames = scene.num_frames();
+    let betas: Vec<Vec<f64>> = (0..frames).map(|k| scene.frame_betas(k)).collect();
+    let garment_s = started.elapsed().as_secs_f64();
+    let seen = r
+        .trained
+        .data
+        .templates
+        .iter()
+        .any(|t| t.name == garment.name && t.in_training());
+    let predicted = json!({
+        "model": r.model_name, "target": r.trained.data.target.name(),
+        "resolution": r.trained.data.resolution, "settings": r.settings,
+        "template_seen_in_training": seen,
+    });
+    let meta = scene.sequence_meta(&garment.name, model.name(), r.software);
+    let bar = ProgressBar::new(frames as u64).with_style(
+        ProgressStyle::with_template(
+            "predicting [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
+        )?
+        .progress_chars("=> "),
+    );
+    if r.quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let recorded = Recorded {
+        predictor: &predictor,
+        garment: &mut ready,
+        template: &template,
+        body: BodySequence {
+            motion: &motion,
+            betas: &betas,
+            material: scene.config.material,
+        },
+        frames: 0..frames,
+        settings: r.settings,
+        meta: &meta,
+        predicted: &predicted,
+        faces: model.faces(),
+        body_vertices: r.body_vertices,
+        obj: r.obj_dir.map(|d| (d, garment.as_ref())),
+        bar: &bar,
+    };
+    let stats = record_prediction(r.out, recorded)
+        .with_context(|| format!("predicting into {}", r.out.display()))?;
+    bar.finish_and_clear();
+    let mean = |f: fn(&(f64, f64)) -> f64| -> f64 {
+        stats.collision.iter().map(f).sum::<f64>() / stats.collision.len().max(1) as f64
+    };
+    Ok(ScenePrediction {
+        frames,
+        vertices: ready.vertices(),
+        seen,
+        frames_per_s: frames as f64 / stats.timing.wall_s.max(1e-9),
+        garment_s,
+        e_c: mean(|c| c.0),
+        e_c_vertex: mean(|c| c.1),
+        stats,
+    })
 }

@@ -53,11 +53,46 @@ fn demo_writes_a_readable_sequence_and_summary() {
     for preview in [
         "pictures/contact_sheet.png",
         "pictures/sequence.gif",
+        "pictures/comparison_sheet.png",
+        "pictures/comparison.gif",
+        "predicted.mcap",
         "view.html",
     ] {
         assert!(out.join(preview).exists(), "demo did not write {preview}");
     }
     assert_eq!(summary["viewer"], out.join("view.html").to_str().unwrap());
+    // The shipped surrogate predicted the same 8 frames, scored against the simulation.
+    let predicted = &summary["predicted"];
+    for key in [
+        "recording",
+        "frames",
+        "frames_per_s",
+        "E_v",
+        "E_CD",
+        "E_n",
+        "E_c",
+        "E_b",
+        "E_s",
+        "E_d",
+        "model",
+        "steps",
+        "guidance",
+    ] {
+        assert!(!predicted[key].is_null(), "summary.predicted lacks {key}");
+    }
+    assert_eq!(predicted["frames"], 8);
+    assert_eq!(predicted["model"], "builtin");
+    assert_eq!(predicted["template_seen_in_training"], false);
+    let e_v = predicted["E_v"].as_f64().unwrap();
+    assert!(e_v > 0.0 && e_v < 20.0, "E_v {e_v} cm");
+    assert!(summary["speedup"].as_f64().unwrap() > 0.0);
+    assert_eq!(
+        summary["comparison_sheet"],
+        out.join("pictures/comparison_sheet.png").to_str().unwrap()
+    );
+    let predicted_recording = sim::recording::Recording::read(&out.join("predicted.mcap")).unwrap();
+    assert_eq!(predicted_recording.garment.len(), 8);
+    assert!(stdout.contains("predicted"), "{stdout}");
     assert!(
         std::fs::read_dir(&out).unwrap().all(|e| !e
             .unwrap()
@@ -65,6 +100,44 @@ fn demo_writes_a_readable_sequence_and_summary() {
             .to_string_lossy()
             .ends_with(".tmp"))
     );
+}
+
+/// A missing or damaged surrogate stops the demo before it simulates, with an error naming
+/// it; `--surrogate none` simulates only.
+#[test]
+fn demo_refuses_a_bad_surrogate_and_runs_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = out.to_str().unwrap();
+    let missing = dir.path().join("no-run");
+    let stderr = fails(&["demo", "--out", o, "--surrogate", missing.to_str().unwrap()]);
+    assert!(stderr.contains("no-run"), "{stderr}");
+    let damaged = dir.path().join("damaged");
+    std::fs::create_dir_all(&damaged).unwrap();
+    let weights = Path::new(env!("CARGO_MANIFEST_DIR")).join("surrogate/weights");
+    for file in ["config.toml", "tensors.json"] {
+        std::fs::copy(weights.join(file), damaged.join(file)).unwrap();
+    }
+    let mut bytes = std::fs::read(weights.join("model.safetensors")).unwrap();
+    bytes.truncate(bytes.len() / 2);
+    std::fs::write(damaged.join("model.safetensors"), bytes).unwrap();
+    let stderr = fails(&["demo", "--out", o, "--surrogate", damaged.to_str().unwrap()]);
+    assert!(stderr.contains("model.safetensors"), "{stderr}");
+    assert!(!out.join("sequence.mcap").exists());
+    ok(&[
+        "demo",
+        "--out",
+        o,
+        "--motion",
+        "walk:duration=1",
+        "--frames",
+        "3",
+        "--surrogate",
+        "none",
+    ]);
+    let summary = json(&out.join("summary.json"));
+    assert!(summary.get("predicted").is_none());
+    assert!(!out.join("predicted.mcap").exists());
 }
 
 #[test]

@@ -228,12 +228,17 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         Some(t) => json!({
             "run": t.run, "weights_sha256": weights, "target": t.data.target.name(),
             "resolution": t.data.resolution, "config": t.config,
-            "trained_on": t.data.templates.iter().map(|t| &t.name).collect::<Vec<_>>(),
+            "trained_on": t.data.templates.iter().filter(|t| t.in_training()).map(|t| &t.name).collect::<Vec<_>>(),
         }),
         None => Value::Null,
     };
+    // What makes the predictions: the weights and their config, not the folder they are in.
+    let identity = trained.as_ref().map(|t| {
+        json!({"weights_sha256": weights, "target": t.data.target.name(),
+               "resolution": t.data.resolution, "config": t.config})
+    });
     let fingerprint = json!({
-        "model": model_json, "steps": settings.steps, "guidance": settings.guidance,
+        "model": identity, "steps": settings.steps, "guidance": settings.guidance,
         "seed": settings.seed, "batch": settings.batch,
         "baselines": baselines.iter().map(|(m, _)| m.name()).collect::<Vec<_>>(),
         "floor": {"resolution": floor.resolution, "target": floor.target.name()},

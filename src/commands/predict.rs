@@ -5,16 +5,14 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
-use sim::recording::TemplateArrays;
 use surrogate::burn::prelude::Device;
-use surrogate::predict::{BodySequence, Guidance, Noise, Predictor, Settings};
+use surrogate::predict::{Guidance, Noise, Settings};
 use surrogate::train::TrainedModel;
 
 use crate::cli::{ModelArgs, PredictArgs, SceneArgs};
 use crate::output::write_json;
-use crate::prediction::{PredictionStats, Recorded, model_dir, record_prediction};
+use crate::prediction::{PredictionStats, SceneRequest, model_dir, predict_scene};
 use crate::run::{prepare, resolve_config, set_threads};
 
 pub fn run(args: &PredictArgs) -> Result<()> {
@@ -73,81 +71,31 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     };
     let config = resolve_config(&scene_args)?;
     let prepared = prepare(config)?;
-    let (model, garment, scene) = (&prepared.model, &prepared.garment, &prepared.scene);
-    let predictor = Predictor::new(&trained, model)?;
-    let template = TemplateArrays {
-        positions: garment.positions.clone(),
-        triangles: garment.triangles.clone(),
-        uvs: garment.uvs.clone(),
-        uv_triangles: garment.uv_triangles.clone(),
-    };
-    let mut ready = predictor
-        .garment(&template)
-        .with_context(|| format!("garment '{}'", garment.name))?;
-    let motion = scene.body_motion();
-    let frames = scene.num_frames();
-    let betas: Vec<Vec<f64>> = (0..frames).map(|k| scene.frame_betas(k)).collect();
-    let body = BodySequence {
-        motion: &motion,
-        betas: &betas,
-        material: scene.config.material,
-    };
-    let seen = trained
-        .data
-        .templates
-        .iter()
-        .any(|t| t.name == garment.name);
     let model_name = run_dir.display().to_string();
-    let predicted = json!({
-        "model": model_name, "target": trained.data.target.name(),
-        "resolution": trained.data.resolution, "settings": settings,
-        "template_seen_in_training": seen,
-    });
     let software = format!("dit-garment {} predict", env!("CARGO_PKG_VERSION"));
-    let meta = scene.sequence_meta(&garment.name, model.name(), &software);
-
-    let bar = ProgressBar::new(frames as u64).with_style(
-        ProgressStyle::with_template(
-            "predicting [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
-        )?
-        .progress_chars("=> "),
-    );
-    if args.quiet {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
     let prepared_s = started.elapsed().as_secs_f64();
-    let recorded = Recorded {
-        predictor: &predictor,
-        garment: &mut ready,
-        template: &template,
-        body,
-        frames: 0..frames,
+    let request = SceneRequest {
+        trained: &trained,
+        model_name: &model_name,
         settings: &settings,
-        meta: &meta,
-        predicted: &predicted,
-        faces: model.faces(),
+        out: &args.out,
+        obj_dir: args.obj_dir.as_deref(),
         body_vertices: args.body_vertices,
-        obj: args.obj_dir.as_deref().map(|d| (d, garment.as_ref())),
-        bar: &bar,
+        quiet: args.quiet,
+        software: &software,
     };
-    let stats = record_prediction(&args.out, recorded)
-        .with_context(|| format!("predicting into {}", args.out.display()))?;
-    bar.finish_and_clear();
+    let p = predict_scene(&prepared, &request)?;
+    let (garment, scene) = (&prepared.garment, &prepared.scene);
     let PredictionStats {
         finite,
         max_penetration_m: max_penetration,
         max_inside,
         pushed,
-        collision,
+        ref collision,
         timing,
-    } = stats;
-
-    let sampling_s = timing.wall_s;
-    let frames_per_s = frames as f64 / sampling_s.max(1e-9);
-    let mean = |f: fn(&(f64, f64)) -> f64| -> f64 {
-        collision.iter().map(f).sum::<f64>() / collision.len().max(1) as f64
-    };
-    let (e_c, e_c_vertex) = (mean(|c| c.0), mean(|c| c.1));
+    } = p.stats;
+    let (frames, frames_per_s, seen) = (p.frames, p.frames_per_s, p.seen);
+    let (e_c, e_c_vertex) = (p.e_c, p.e_c_vertex);
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(path) = &args.json {
         let threads = rayon::current_num_threads();
@@ -160,11 +108,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
                 "E_c_percent": e_c, "E_c_vertex_percent": e_c_vertex,
                 "frames_scored": collision.len(),
                 "max_penetration_m": max_penetration, "max_verts_inside": max_inside,
-                "pushed_vertices": pushed, "vertices": ready.vertices(), "model": model_name,
+                "pushed_vertices": pushed, "vertices": p.vertices, "model": model_name,
                 "garment": garment.name, "template_seen_in_training": seen,
                 "motion": scene.motion.name, "seed": settings.seed,
                 "noise": settings.noise, "resolve_penetration": settings.resolve_penetration,
-                "threads": threads, "prepare_s": prepared_s, "timing_s": timing,
+                "threads": threads, "prepare_s": prepared_s + p.garment_s, "timing_s": timing,
                 "recording": args.out,
             }),
         )?;
@@ -172,7 +120,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     println!(
         "predict: '{}' ({} vertices{}) through '{}': {} frames in {:.1} s ({:.1} frames/s, {} steps, guidance {})",
         garment.name,
-        ready.vertices(),
+        p.vertices,
         if seen {
             ", seen in training"
         } else {
@@ -180,7 +128,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         },
         scene.motion.name,
         frames,
-        sampling_s,
+        timing.wall_s,
         frames_per_s,
         settings.steps,
         settings.guidance.weight,

@@ -15,7 +15,7 @@ fn resolve(args: &TrainArgs) -> Result<RunConfig> {
     let own = args.out.join("config.toml");
     let mut config = match (&args.config, args.resume && own.exists()) {
         (Some(path), _) => RunConfig::load(path)?,
-        (None, true) => RunConfig::load(&own)?,
+        (None, true) => RunConfig::load_saved(&own)?,
         (None, false) => RunConfig::default(),
     };
     if let Some(steps) = args.steps {

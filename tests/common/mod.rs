@@ -51,8 +51,14 @@ pub fn ok(args: &[&str]) -> String {
 /// Runs the binary, asserts failure and returns its standard error.
 pub fn fails(args: &[&str]) -> String {
     let out = run_with(args, &[]);
-    assert!(!out.status.success(), "{args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).to_string()
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    // A refusal exits with 1; 101 would be a panic, none a signal.
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{args:?} should fail with 1: {stderr}"
+    );
+    stderr
 }
 
 /// A JSON file.

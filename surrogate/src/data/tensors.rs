@@ -96,6 +96,14 @@ pub struct TemplateInfo {
     pub frames: BTreeMap<String, usize>,
 }
 
+impl TemplateInfo {
+    /// Whether a model trained on these tensors has seen this template (it has frames in the
+    /// train split; the tensors hold the held-out splits' templates too).
+    pub fn in_training(&self) -> bool {
+        self.frames.get("train").is_some_and(|&n| n > 0)
+    }
+}
+
 /// Normalization statistics, computed on the train split only.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Normalization {

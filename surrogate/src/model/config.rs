@@ -7,7 +7,7 @@ use crate::geometry::TargetKind;
 
 /// Channels of the network's input image: noisy target (3), position map (3), mask (1).
 pub const INPUT_CHANNELS: usize = 7;
-/// Channels of its output: the velocity of the target map.
+/// Channels of its output: the velocity of the target map, or the map itself.
 pub const OUTPUT_CHANNELS: usize = 3;
 /// Width of the sinusoidal timestep features (Sana's and DiT's 256).
 pub const FREQUENCY_DIM: usize = 256;
@@ -22,6 +22,27 @@ pub enum Depthwise {
     Shifted,
     /// burn's `Conv2d` with one group per channel.
     Conv2d,
+}
+
+/// What the network's output means. Either way the sampler integrates the same flow; only
+/// what the network has to produce differs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Prediction {
+    /// The velocity eps - z0 (rectified flow's usual output; what a configuration without the
+    /// key means, so runs made before the key existed load unchanged).
+    #[serde(rename = "velocity")]
+    Velocity,
+    /// The clean target map z0; the sampler's velocity is (x - z0_hat) / s. The output never
+    /// has to reproduce the input noise texel by texel, which a small network does only
+    /// roughly (the velocity model's garments came out crumpled: docs/SURROGATE.md).
+    #[serde(rename = "x0")]
+    Data,
+}
+
+impl Prediction {
+    fn before_the_key() -> Self {
+        Prediction::Velocity
+    }
 }
 
 /// A Sana-style DiT over UV geometry images (docs/SURROGATE.md, "The model").
@@ -48,6 +69,9 @@ pub struct DitConfig {
     pub target: TargetKind,
     /// How the depthwise convolution is computed.
     pub depthwise: Depthwise,
+    /// What the output is (`velocity` or `x0`).
+    #[serde(default = "Prediction::before_the_key")]
+    pub prediction: Prediction,
 }
 
 impl Default for DitConfig {
@@ -67,6 +91,7 @@ impl Default for DitConfig {
             // Measured faster than the shifted multiply-adds in training (12.0 vs 10.1
             // samples/s at patch 4, 2.6 vs 1.8 at patch 2; docs/BENCHMARKS.md).
             depthwise: Depthwise::Conv2d,
+            prediction: Prediction::Data,
         }
     }
 }

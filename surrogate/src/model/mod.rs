@@ -6,7 +6,9 @@ mod config;
 mod dit;
 mod layers;
 
-pub use config::{Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, OUTPUT_CHANNELS};
+pub use config::{
+    Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, OUTPUT_CHANNELS, Prediction,
+};
 pub use dit::{Block, ConditionEmbedder, Dit, TimestepEmbedder};
 pub use layers::{CrossAttention, DepthwiseConv, LinearAttention, MixFfn, norm, timestep_features};
 

@@ -11,6 +11,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::config::{TimeSampling, TrainConfig};
 use crate::data::{Frames, TrainingTensors};
+use crate::model::Prediction;
 
 /// A generator for `purpose` at `step` of the run seeded by `seed`.
 pub fn generator(seed: u64, purpose: u64, step: u64) -> ChaCha8Rng {
@@ -60,8 +61,8 @@ pub struct Batch {
     pub time: Vec<f32>,
     /// `[B, D]`.
     pub conditions: Vec<f32>,
-    /// eps - z0, `[B, 3, R, R]`.
-    pub velocity: Vec<f32>,
+    /// What the network should output: eps - z0 (velocity) or z0 (x0), `[B, 3, R, R]`.
+    pub target: Vec<f32>,
 }
 
 impl Batch {
@@ -72,6 +73,7 @@ impl Batch {
         frames: &[usize],
         times: &[f32],
         inside_weight: f32,
+        prediction: Prediction,
         rng: &mut ChaCha8Rng,
     ) -> Self {
         let r = tensors.resolution();
@@ -88,7 +90,10 @@ impl Batch {
             for &x in z0 {
                 let eps = normal(rng);
                 b.noisy.push((1.0 - s) * x + s * eps);
-                b.velocity.push(eps - x);
+                b.target.push(match prediction {
+                    Prediction::Velocity => eps - x,
+                    Prediction::Data => x,
+                });
             }
             b.position
                 .extend_from_slice(&tensors.position_maps[g * 3 * plane..(g + 1) * 3 * plane]);
@@ -111,6 +116,7 @@ impl Batch {
         tensors: &TrainingTensors,
         split: &Frames,
         training: &TrainConfig,
+        prediction: Prediction,
         step: usize,
     ) -> Self {
         let mut rng = generator(training.seed, TRAIN_STREAM, step as u64);
@@ -126,6 +132,7 @@ impl Batch {
             &frames,
             &times,
             training.inside_weight as f32,
+            prediction,
             &mut rng,
         )
     }
@@ -150,15 +157,13 @@ impl Batch {
         )
     }
 
-    /// The weighted mean squared error of a predicted velocity `[B, 3, R, R]`:
-    /// sum w (v - eps + z0)^2 / (3 sum w), a scalar `[1]`.
+    /// The weighted mean squared error of the network's output `[B, 3, R, R]` against
+    /// `target`: sum w (out - target)^2 / (3 sum w), a scalar `[1]`.
     pub fn loss(&self, predicted: Tensor<4>) -> Tensor<1> {
         let device = predicted.device();
         let [b, _, r, _] = predicted.dims();
-        let target = Tensor::<4>::from_data(
-            TensorData::new(self.velocity.clone(), [b, 3, r, r]),
-            &device,
-        );
+        let target =
+            Tensor::<4>::from_data(TensorData::new(self.target.clone(), [b, 3, r, r]), &device);
         let weight =
             Tensor::<4>::from_data(TensorData::new(self.weight.clone(), [b, 1, r, r]), &device);
         let total: f32 = self.weight.iter().sum::<f32>().max(1e-12) * 3.0;
@@ -174,6 +179,7 @@ pub fn validation_batches(
     tensors: &TrainingTensors,
     split: &Frames,
     training: &TrainConfig,
+    prediction: Prediction,
 ) -> Vec<Batch> {
     let count = training.val_frames.min(split.len());
     if count == 0 {
@@ -194,6 +200,7 @@ pub fn validation_batches(
                 f,
                 t,
                 training.inside_weight as f32,
+                prediction,
                 &mut rng,
             )
         })

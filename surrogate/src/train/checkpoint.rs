@@ -141,7 +141,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
         .map_err(|e| file_error(&pointer_path, format!("damaged: {e}")))?;
     let dir = run.join(&pointer.dir);
     let saved_path = dir.join("config.toml");
-    let saved = RunConfig::load(&saved_path)?;
+    let saved = RunConfig::load_saved(&saved_path)?;
     if let Some(difference) = config.first_difference(&saved) {
         return Err(file_error(
             &saved_path,

@@ -214,6 +214,26 @@ impl RunConfig {
         Self::from_toml(&text, &path.display().to_string())
     }
 
+    /// Reads the configuration a run saved (`RUN/config.toml`, a checkpoint's). Saved files
+    /// hold every key, so one without `model.prediction` was written before the key existed,
+    /// by a velocity model.
+    pub fn load_saved(path: &std::path::Path) -> Result<Self> {
+        let mut config = Self::load(path)?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Config {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let has_key = text
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|t| t.get("model")?.get("prediction").cloned())
+            .is_some();
+        if !has_key {
+            config.model.prediction = crate::model::Prediction::Velocity;
+        }
+        Ok(config)
+    }
+
     /// The first key whose value differs from `other`'s, as `key = here (there)`.
     pub fn first_difference(&self, other: &Self) -> Option<String> {
         let (a, b) = (
@@ -251,10 +271,41 @@ mod tests {
             "training.lr = -1: must be in (0, 1]"
         );
         let c = RunConfig::from_toml("[model]\nwidth = 64\nheads = 2\n", "m.toml").unwrap();
+        assert_eq!(c.model.prediction, crate::model::Prediction::Data);
         assert_eq!(c.model.width, 64);
         assert_eq!(c.training, TrainConfig::default());
         let d = c.first_difference(&RunConfig::default()).unwrap();
         assert_eq!(d, "model.heads = 2 here, 4 there");
+    }
+
+    /// A run saved before `model.prediction` existed is a velocity model; a saved file with
+    /// the key keeps it.
+    #[test]
+    fn a_saved_configuration_without_the_prediction_key_is_a_velocity_model() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("config.toml");
+        let full = RunConfig::default().to_toml();
+        assert!(full.contains("prediction = \"x0\""), "{full}");
+        std::fs::write(&path, &full).unwrap();
+        assert_eq!(
+            RunConfig::load_saved(&path).unwrap().model.prediction,
+            crate::model::Prediction::Data
+        );
+        let old: String = full
+            .lines()
+            .filter(|l| !l.starts_with("prediction"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        std::fs::write(&path, old).unwrap();
+        assert_eq!(
+            RunConfig::load_saved(&path).unwrap().model.prediction,
+            crate::model::Prediction::Velocity
+        );
+        // A user's partial file takes the default.
+        assert_eq!(
+            RunConfig::load(&path).unwrap().model.prediction,
+            crate::model::Prediction::Data
+        );
     }
 
     #[test]

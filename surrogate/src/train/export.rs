@@ -40,7 +40,7 @@ pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
 /// error naming the file, never a silent partial load.
 pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     let config_path = run.join("config.toml");
-    let config = RunConfig::load(&config_path)?;
+    let config = RunConfig::load_saved(&config_path)?;
     config.validate().map_err(|e| file_error(&config_path, e))?;
     let weights = run.join("model.safetensors");
     if !weights.is_file() {

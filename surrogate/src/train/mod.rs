@@ -1,6 +1,6 @@
-//! Training with rectified flow: z_s = (1 - s) z0 + s eps, the network predicts the velocity
-//! eps - z0 (the standard interpolation; the paper's DDPM-schedule formula is not rectified
-//! flow, docs/SURROGATE.md), AdamW with warm-up and cosine decay, global-norm clipping, an EMA
+//! Training with rectified flow: z_s = (1 - s) z0 + s eps, the network predicts z0 or the
+//! velocity eps - z0 (`model.prediction`; the standard interpolation, the paper's
+//! DDPM-schedule formula is not rectified flow, docs/SURROGATE.md), AdamW with warm-up and cosine decay, global-norm clipping, an EMA
 //! of the weights, a fixed validation set, checkpoints every K steps and exact resume.
 //!
 //! A run folder holds `config.toml`, `tensors.json` (the manifest of the tensors trained on:
@@ -29,7 +29,7 @@ pub use optim::{clip_global_norm, ema_decay, update_ema};
 
 use crate::data::TrainingTensors;
 use crate::error::{Error, Result, file_error};
-use crate::model::Dit;
+use crate::model::{Dit, Prediction};
 
 /// One line of `log.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -207,7 +207,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let config_path = run.join("config.toml");
     if options.resume {
         if config_path.exists() {
-            let saved = RunConfig::load(&config_path)?;
+            let saved = RunConfig::load_saved(&config_path)?;
             if let Some(d) = config.first_difference(&saved) {
                 return Err(file_error(
                     &config_path,
@@ -239,7 +239,8 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         Some(split) => tensors.frames(split)?,
         None => crate::data::Frames::default(),
     };
-    let val_batches = validation_batches(&tensors, &val_frames, t);
+    let prediction = config.model.prediction;
+    let val_batches = validation_batches(&tensors, &val_frames, t, prediction);
 
     let device = Device::flex().autodiff();
     device.seed(t.seed);
@@ -278,7 +279,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let mut saved_at = state.step;
     while state.step < t.steps {
         let step = state.step;
-        let batch = Batch::training(&tensors, &train_frames, t, step);
+        let batch = Batch::training(&tensors, &train_frames, t, prediction, step);
         let (noisy, position, mask, time, conditions) = batch.inputs(&device);
         let loss = batch.loss(model.forward(noisy, position, mask, time, conditions));
         let loss_value = f64::from(loss.clone().into_scalar::<f32>());
@@ -344,7 +345,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     write_log(run, &log)?;
     plot(run, &log)?;
     save_weights(&ema, &run.join("model.safetensors"))?;
-    let reference = reference_batch(&tensors, &train_frames, &val_frames, t);
+    let reference = reference_batch(&tensors, &train_frames, &val_frames, t, prediction);
     save_reference(&ema, &reference, &run.join("reference.safetensors"))?;
     let summary = Summary {
         steps: state.step,
@@ -381,6 +382,7 @@ fn reference_batch(
     train: &crate::data::Frames,
     val: &crate::data::Frames,
     t: &TrainConfig,
+    prediction: Prediction,
 ) -> Batch {
     let split = if val.is_empty() { train } else { val };
     let frames = [0, split.len() - 1];
@@ -391,6 +393,7 @@ fn reference_batch(
         &frames,
         &[0.25, 0.75],
         t.inside_weight as f32,
+        prediction,
         &mut rng,
     )
 }
