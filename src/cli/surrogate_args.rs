@@ -1,0 +1,186 @@
+//! The surrogate's command-line flags: `train`, `predict`, `evaluate` (plain values, no I/O).
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+#[derive(Debug, Args)]
+pub struct EvaluateArgs {
+    /// Trained model: a run folder, `builtin` (the shipped weights) or `none` (baselines only).
+    #[arg(long, default_value = "builtin")]
+    pub model: String,
+    /// Dataset folder (`synth --out`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Splits to score, comma-separated (those without sequences are skipped).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "test,test_garment,test_motion,test_shape,test_material"
+    )]
+    pub splits: Vec<String>,
+    /// Euler steps of the model's sampler.
+    #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
+    pub steps: usize,
+    /// Guidance weight of the `model` rows (`model_no_guidance` uses 0).
+    #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
+    pub guidance: f64,
+    /// Fraction of the steps done before guidance starts.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
+    pub guidance_start: f64,
+    /// Seed of the sampler's noise.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Frames sampled together.
+    #[arg(long, default_value_t = 16)]
+    pub batch: usize,
+    /// Baselines, comma-separated: lbs, lbs_nearest, floor, rest.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "lbs,lbs_nearest,floor,rest"
+    )]
+    pub baselines: Vec<String>,
+    /// At most K sequences per split (the first K in the manifest's order).
+    #[arg(long)]
+    pub max_sequences: Option<usize>,
+    /// SMPL-format .npz body model the dataset was made with (default: the default body).
+    #[arg(long)]
+    pub body_model: Option<PathBuf>,
+    /// Write the scores here (`splits`, `sequences`, `model`, `settings`, `units`, ...).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write the report here: README.md, index.html, pictures; per-sequence results are
+    /// cached in DIR/sequences and reused by a rerun with the same settings.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Compute threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// Trained model: a run folder (`train --out`) or `builtin` (the shipped weights).
+    #[arg(long, default_value = "builtin")]
+    pub model: String,
+    /// Start from the inputs of a recording (its garment, motion, shape, material and frames)
+    /// to predict what it simulated; the flags below override them.
+    #[arg(long)]
+    pub config_from: Option<PathBuf>,
+    /// Garment: a library design, the built-in skirt (`skirt`, `default`) or a template OBJ
+    /// with UVs aligned to the default body in its canonical A-pose. Default: `default`.
+    #[arg(long)]
+    pub garment: Option<String>,
+    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
+    /// AMASS .npz file. Default: `walk`.
+    #[arg(long)]
+    pub motion: Option<String>,
+    /// SMPL-format .npz body model file: the one the model was trained on (default: the
+    /// licence-free default body).
+    #[arg(long)]
+    pub body_model: Option<PathBuf>,
+    /// Shape coefficients, comma-separated (default: zeros).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub betas: Option<Vec<f64>>,
+    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset; defaults 100, 0.2, 1e-5).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Output frames, blend-in and settle included (default: the whole motion).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Frames blending from the canonical pose into the motion. Default: 30.
+    #[arg(long)]
+    pub blend_frames: Option<usize>,
+    /// Frames holding the first frame after the blend. Default: 30.
+    #[arg(long)]
+    pub settle_frames: Option<usize>,
+    /// Euler steps from noise to data.
+    #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
+    pub steps: usize,
+    /// Time shift of the step schedule (1: uniform; above 1 spends more steps at high noise).
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
+    pub shift: f64,
+    /// Intersection guidance weight (0 turns it off).
+    #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
+    pub guidance: f64,
+    /// Fraction of the steps done before guidance starts.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
+    pub guidance_start: f64,
+    /// Seed of the initial noise.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Frames sampled together.
+    #[arg(long, default_value_t = 16)]
+    pub batch: usize,
+    /// Draw the initial noise per frame (default: one noise for the whole sequence, which
+    /// keeps frames coherent).
+    #[arg(long)]
+    pub per_frame_noise: bool,
+    /// After sampling, push vertices still inside the body out along its normal (D-Garment's
+    /// post-process; off by default, reported separately).
+    #[arg(long)]
+    pub resolve_penetration: bool,
+    /// Output recording (.mcap).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write every frame's garment (and body) as OBJ into this folder.
+    #[arg(long)]
+    pub obj_dir: Option<PathBuf>,
+    /// Also record the body vertices of every frame (large).
+    #[arg(long)]
+    pub body_vertices: bool,
+    /// Write the run's figures (`frames`, `finite`, `frames_per_s`, `wall_s`, `steps`,
+    /// `guidance`, `batch`, `E_c_percent`, `max_penetration_m`, `vertices`, `model`, ...) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Compute threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Training tensors folder (`dataset tensors --out`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Run folder: `config.toml`, `log.jsonl`, `loss.png`, `checkpoint-<step>/`,
+    /// `model.safetensors`, `reference.safetensors`, `summary.json`.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Run configuration (TOML, `[model]` and `[training]` tables) over the defaults; see
+    /// `--print-config`. With `--resume`, the run's own `config.toml` is the default.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Optimizer steps of the whole run (`training.steps`).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Stop after this many minutes (at the next log line, with a checkpoint); `--resume`
+    /// continues.
+    #[arg(long)]
+    pub minutes: Option<f64>,
+    /// Frames per step (`training.batch`).
+    #[arg(long)]
+    pub batch: Option<usize>,
+    /// Seed of the weights, batches and noise (`training.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Continue the run in `--out` from its last checkpoint.
+    #[arg(long)]
+    pub resume: bool,
+    /// Print the resolved configuration (TOML) and exit.
+    #[arg(long)]
+    pub print_config: bool,
+    /// Compute threads (default: all cores; 1 gives bit-identical reruns).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
