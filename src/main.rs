@@ -11,6 +11,7 @@ mod pictures;
 mod prediction;
 mod report;
 mod run;
+mod scoring;
 
 use std::process::ExitCode;
 

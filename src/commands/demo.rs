@@ -13,7 +13,6 @@ use surrogate::burn::prelude::Device;
 use surrogate::predict::Settings;
 use surrogate::train::TrainedModel;
 
-use super::compare;
 use crate::cli::DemoArgs;
 use crate::output::write_json;
 use crate::pictures::{RenderJob, comparison_gif, comparison_sheet, render_recording, write_view};
@@ -110,7 +109,7 @@ fn predict_and_compare(
         software: &software,
     };
     let p = predict_scene(prepared, &request)?;
-    let scores = compare::score(&out.join("sequence.mcap"), &path, &prepared.model, 0)?;
+    let scores = crate::scoring::score(&out.join("sequence.mcap"), &path, &prepared.model, 0)?;
     let n = p.frames;
     let frames: Vec<usize> = (0..6).map(|i| i * (n - 1) / 5).collect();
     let sheet = pictures.join("comparison_sheet.png");
