@@ -109,11 +109,11 @@ fn predict_and_compare(
         software: &software,
     };
     let p = predict_scene(prepared, &request)?;
-    let scores = crate::scoring::score(&out.join("sequence.mcap"), &path, &prepared.model, 0)?;
+    let truth = out.join("sequence.mcap");
+    let scores = crate::scoring::score(&truth, &path, &prepared.model, 0)?;
     let n = p.frames;
     let frames: Vec<usize> = (0..6).map(|i| i * (n - 1) / 5).collect();
     let sheet = pictures.join("comparison_sheet.png");
-    let truth = out.join("sequence.mcap");
     comparison_sheet(&truth, &path, &prepared.model, &frames, 320, &sheet)?;
     let gif = pictures.join("comparison.gif");
     comparison_gif(&truth, &path, &prepared.model, 2, 240, &gif)?;

@@ -207,22 +207,15 @@ impl RunConfig {
 
     /// Reads a file over the defaults.
     pub fn load(path: &std::path::Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Config {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        Self::from_toml(&text, &path.display().to_string())
+        Self::from_toml(&read_text(path)?, &path.display().to_string())
     }
 
     /// Reads the configuration a run saved (`RUN/config.toml`, a checkpoint's). Saved files
     /// hold every key, so one without `model.prediction` was written before the key existed,
     /// by a velocity model.
     pub fn load_saved(path: &std::path::Path) -> Result<Self> {
-        let mut config = Self::load(path)?;
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Config {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = read_text(path)?;
+        let mut config = Self::from_toml(&text, &path.display().to_string())?;
         let has_key = text
             .parse::<toml::Table>()
             .ok()
@@ -255,6 +248,13 @@ impl RunConfig {
         }
         None
     }
+}
+
+fn read_text(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| Error::Config {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })
 }
 
 #[cfg(test)]
