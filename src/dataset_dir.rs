@@ -51,8 +51,9 @@ impl DatasetDir {
 
 /// SHA-256 of a file, hex.
 pub fn sha256_file(path: &Path) -> Result<(String, u64)> {
-    let mut file =
-        std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let (file, len) = files::open(path)?;
+    // Never more than the size it had when opened (a growing file still ends).
+    let mut file = file.take(len);
     let mut hasher = Sha256::new();
     let mut buffer = vec![0u8; 1 << 20];
     let mut bytes = 0u64;
@@ -74,8 +75,7 @@ pub fn sha256_file(path: &Path) -> Result<(String, u64)> {
 
 /// Reads a JSON Lines file of `T`, naming the file and line of a bad one.
 pub fn read_jsonl<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = files::read_to_string(path, files::limits::TEXT, "JSON Lines file")?;
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
@@ -100,7 +100,7 @@ pub fn write_jsonl<T: serde::Serialize>(path: &Path, values: &[T]) -> Result<()>
 /// A finished sequence's record, if it is complete: the record parses and its recording (if
 /// any) matches the checksum.
 pub fn finished_record(dir: &DatasetDir, id: &str) -> Option<ManifestRecord> {
-    let text = std::fs::read_to_string(dir.record(id)).ok()?;
+    let text = files::read_to_string(&dir.record(id), files::limits::TEXT, "record").ok()?;
     let record: ManifestRecord = serde_json::from_str(&text).ok()?;
     if let (Some(file), Some(sha)) = (&record.file, &record.sha256) {
         let (actual, _) = sha256_file(&dir.root.join(file)).ok()?;

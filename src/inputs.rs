@@ -47,8 +47,7 @@ pub struct BodyParams {
 impl BodyParams {
     /// Reads and checks a params file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+        let text = files::read_to_string(path, files::limits::TEXT, "body parameters")?;
         let params: Self = serde_json::from_str(&text)
             .with_context(|| format!("{}: not a valid params file", path.display()))?;
         if let Some(pose) = &params.pose

@@ -19,6 +19,18 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
+    // On SIGINT, SIGTERM or SIGHUP: remove the outputs being written, then stop (130, as a
+    // shell reports an interrupted command).
+    let stopped = ctrlc::set_handler(|| {
+        files::remove_temporaries();
+        eprintln!("stopped by a signal; outputs being written were removed");
+        std::process::exit(130);
+    });
+    if let Err(err) = stopped {
+        eprintln!(
+            "warning: cannot handle signals ({err}); an interrupted run may leave *.tmp files"
+        );
+    }
     match commands::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {

@@ -8,6 +8,9 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 /// What can go wrong with a garment.
 #[derive(Debug, Error)]
 pub enum Error {
+    /// A file the user named is unreadable, not a regular file or too large.
+    #[error(transparent)]
+    File(#[from] files::Error),
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {

@@ -23,16 +23,16 @@ pub fn read_obj(path: &Path) -> Result<Garment> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _) = tobj::load_obj(path, &options).map_err(|e| match e {
-        tobj::LoadError::OpenFileFailed => Error::Io {
+    let text = files::read(path, files::limits::MESH, "mesh")?;
+    // A byte-order mark (some Windows editors write one) is not part of the first line.
+    let text = text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&text);
+    // Materials are not used: a `mtllib` line reads nothing.
+    let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
+    let (models, _) =
+        tobj::load_obj_buf(&mut &text[..], &options, no_materials).map_err(|e| Error::Format {
             path: name.clone(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "cannot open file"),
-        },
-        other => Error::Format {
-            path: name.clone(),
-            message: format!("not a readable OBJ: {other}"),
-        },
-    })?;
+            message: format!("not a readable OBJ: {e}"),
+        })?;
     if models.iter().all(|m| m.mesh.indices.is_empty()) {
         return Err(Error::Format {
             path: name,

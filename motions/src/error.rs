@@ -5,6 +5,9 @@ use std::path::PathBuf;
 /// What went wrong loading or evaluating a body model or a motion.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// A file the user named is unreadable, not a regular file or too large.
+    #[error(transparent)]
+    File(#[from] files::Error),
     /// The file could not be opened or read.
     #[error("{path}: {source}")]
     Io {

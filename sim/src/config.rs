@@ -146,10 +146,7 @@ impl SceneConfig {
     /// file and the key. The result is not validated (flags may still change it).
     pub fn load(path: &Path) -> Result<Self> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Config {
-            path: name.clone(),
-            message: e.to_string(),
-        })?;
+        let text = files::read_to_string(path, files::limits::TEXT, "scene configuration")?;
         Self::from_toml(&text, &name)
     }
 

@@ -56,6 +56,10 @@ pub enum MeshError {
 /// What can go wrong when building or running a simulation.
 #[derive(Debug, Error)]
 pub enum Error {
+    /// A file the user named is unreadable, not a regular file or too large, or an output
+    /// path holds something that must not be replaced.
+    #[error(transparent)]
+    File(#[from] files::Error),
     /// The cloth mesh is unusable.
     #[error("invalid cloth mesh: {0}")]
     Mesh(#[from] MeshError),

@@ -337,9 +337,9 @@ fn copy_into(from: &Path, to: &Path) -> Result<()> {
         return Ok(());
     }
     crate::output::write_atomic(to, |w| {
-        let mut f =
-            std::fs::File::open(from).with_context(|| format!("cannot read {}", from.display()))?;
-        std::io::copy(&mut f, w)?;
+        use std::io::Read;
+        let (f, len) = files::open(from)?;
+        std::io::copy(&mut f.take(len), w)?;
         Ok(())
     })
 }

@@ -16,12 +16,15 @@ mod synth;
 mod train;
 mod uv;
 
+use std::path::Path;
+
 use anyhow::Result;
 
-use crate::cli::{Cli, Command};
+use crate::cli::{Cli, Command, DatasetCommand, GarmentsCommand, MotionsCommand};
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
+    check_outputs(&cli.command)?;
     match cli.command {
         Command::Demo(args) => demo::run(&args),
         Command::Simulate(args) => simulate::run(&args),
@@ -40,6 +43,65 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Predict(args) => predict::run(&args),
         Command::Evaluate(args) => evaluate::run(&args),
     }
+}
+
+/// Refuses, before any work, output paths that hold something a run must not replace: a
+/// file output must be a regular file or nothing (never a directory, link, FIFO or device),
+/// a folder output a folder or nothing.
+fn check_outputs(command: &Command) -> Result<()> {
+    let (files_out, folders_out): (Vec<Option<&Path>>, Vec<Option<&Path>>) = match command {
+        Command::Demo(a) => (vec![a.json.as_deref()], vec![a.out.as_deref()]),
+        Command::Simulate(a) => (
+            vec![a.out.as_deref(), a.json.as_deref()],
+            vec![a.obj_dir.as_deref()],
+        ),
+        Command::DrapeBench(a) => (vec![a.json.as_deref()], vec![Some(a.out.as_path())]),
+        Command::Regress(a) => (vec![a.json.as_deref()], vec![]),
+        Command::Compare(a) => (vec![a.json.as_deref()], vec![]),
+        Command::Render(a) => (vec![a.json.as_deref()], vec![Some(a.out.as_path())]),
+        Command::View(a) => (vec![Some(a.out.as_path())], vec![]),
+        Command::Synth(a) => (vec![a.json.as_deref()], vec![a.out.as_deref()]),
+        Command::Dataset { command } => match command {
+            DatasetCommand::Verify { json, .. } | DatasetCommand::Stats { json, .. } => {
+                (vec![json.as_deref()], vec![])
+            }
+            DatasetCommand::Tensors { out, .. } | DatasetCommand::Merge { out, .. } => {
+                (vec![], vec![Some(out.as_path())])
+            }
+        },
+        Command::Body(a) => (vec![a.out.as_deref(), a.json.as_deref()], vec![]),
+        Command::Motions { command } => match command {
+            MotionsCommand::List { json } | MotionsCommand::Show { json, .. } => {
+                (vec![json.as_deref()], vec![])
+            }
+            MotionsCommand::Export { out, json, .. } => {
+                (vec![Some(out.as_path()), json.as_deref()], vec![])
+            }
+        },
+        Command::Garments { command } => match command {
+            GarmentsCommand::List { json } | GarmentsCommand::Check { json, .. } => {
+                (vec![json.as_deref()], vec![])
+            }
+            GarmentsCommand::Show { pattern_out, .. } => (vec![pattern_out.as_deref()], vec![]),
+            GarmentsCommand::Make { out, report, .. } => {
+                (vec![Some(out.as_path()), report.as_deref()], vec![])
+            }
+        },
+        Command::Uv(a) => (vec![a.json.as_deref()], vec![Some(a.out.as_path())]),
+        Command::Train(a) => (vec![], vec![Some(a.out.as_path())]),
+        Command::Predict(a) => (
+            vec![Some(a.out.as_path()), a.json.as_deref()],
+            vec![a.obj_dir.as_deref()],
+        ),
+        Command::Evaluate(a) => (vec![a.json.as_deref()], vec![a.report.as_deref()]),
+    };
+    for path in files_out.into_iter().flatten() {
+        files::check_destination(path)?;
+    }
+    for path in folders_out.into_iter().flatten() {
+        files::check_folder_destination(path)?;
+    }
+    Ok(())
 }
 
 /// Vertical extent of a vertex set, metres.

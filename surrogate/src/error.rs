@@ -78,6 +78,10 @@ pub enum Error {
         /// Texels given.
         got: usize,
     },
+    /// A file the user named is unreadable, not a regular file or too large, or an output
+    /// path holds something that must not be replaced.
+    #[error(transparent)]
+    Files(#[from] files::Error),
     /// A recording or dataset file is unusable.
     #[error("{path}: {problem}")]
     File {

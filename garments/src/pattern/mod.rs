@@ -126,10 +126,7 @@ impl Pattern {
     /// Reads and checks a specification file.
     pub fn read(path: &Path) -> Result<Self> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: shown.clone(),
-            source,
-        })?;
+        let text = files::read_to_string(path, files::limits::MESH, "sewing pattern")?;
         let stem = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())

@@ -236,10 +236,7 @@ impl DatasetSpec {
 
     /// Reads and checks a spec file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Spec {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = files::read_to_string(path, files::limits::TEXT, "dataset spec")?;
         Self::parse(&text, path)
     }
 

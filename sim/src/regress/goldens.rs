@@ -153,8 +153,7 @@ pub fn bless(reason: &str) -> Result<Vec<std::path::PathBuf>> {
     for g in &GOLDENS {
         let (scene, garment, model) = golden_scene(g, 1.0)?;
         let path = dir.join(format!("{}.mcap", g.name));
-        let tmp = dir.join(format!(".{}.mcap.tmp", g.name));
-        let file = std::fs::File::create(&tmp).map_err(|e| io(&tmp, e))?;
+        let (tmp, file) = files::Temporary::create(&path)?;
         let software = format!("sim {}", env!("CARGO_PKG_VERSION"));
         let garment_name = format!("{} (48 x 16)", garment.name);
         let meta = scene.sequence_meta(&garment_name, model.name(), &software);
@@ -173,7 +172,7 @@ pub fn bless(reason: &str) -> Result<Vec<std::path::PathBuf>> {
         let mut writer = SequenceWriter::new(out, &meta, channels, FPS)?;
         scene.run(&model, |f| writer.write_frame(&f.record()))?;
         writer.finish()?;
-        std::fs::rename(&tmp, &path).map_err(|e| io(&path, e))?;
+        tmp.persist()?;
         written.push(path);
     }
     let log = dir.join("BLESSED.md");

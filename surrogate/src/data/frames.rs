@@ -55,7 +55,7 @@ impl Frames {
 
 /// Reads `path` and checks it against `sha256` (hex).
 fn read_checked(path: &Path, sha256: &str) -> Result<Vec<u8>> {
-    let bytes = std::fs::read(path).map_err(|e| file_error(path, e))?;
+    let bytes = files::read(path, files::limits::TENSORS, "tensor file")?;
     let digest: String = Sha256::digest(&bytes)
         .iter()
         .map(|b| format!("{b:02x}"))
@@ -127,7 +127,7 @@ impl TrainingTensors {
     /// Opens a tensors folder: reads and checks the manifest and `templates.safetensors`.
     pub fn open(dir: &Path) -> Result<Self> {
         let path = dir.join("manifest.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| file_error(&path, e))?;
+        let text = files::read_to_string(&path, files::limits::TEXT, "text file")?;
         let manifest: TensorManifest =
             serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
         let n = &manifest.normalization;

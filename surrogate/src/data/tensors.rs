@@ -189,9 +189,11 @@ fn i64_bytes(values: impl Iterator<Item = usize>) -> Vec<u8> {
 
 /// Writes `bytes` to `path` through a temporary name, so a stopped run leaves no half file.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<String> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(|e| file_error(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))?;
+    use std::io::Write;
+    let (tmp, mut file) = files::Temporary::create(path)?;
+    file.write_all(bytes)
+        .map_err(|e| file_error(tmp.path(), e))?;
+    tmp.persist()?;
     Ok(hex(&Sha256::digest(bytes)))
 }
 
@@ -233,7 +235,7 @@ fn stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
 /// then parsed.
 fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
     let path = dir.join("manifest.jsonl");
-    let text = std::fs::read_to_string(&path).map_err(|e| file_error(&path, e))?;
+    let text = files::read_to_string(&path, files::limits::TEXT, "text file")?;
     let mut records = Vec::new();
     for (i, line) in text
         .lines()
@@ -256,7 +258,7 @@ fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
                 ));
             };
             let seq = dir.join(file);
-            let bytes = std::fs::read(&seq).map_err(|e| file_error(&seq, e))?;
+            let bytes = files::read(&seq, files::limits::RECORDING, "recording")?;
             if &hex(&Sha256::digest(&bytes)) != sha {
                 return Err(file_error(
                     &seq,

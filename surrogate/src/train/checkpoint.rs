@@ -34,12 +34,11 @@ struct Pointer {
 
 /// Writes `bytes` to `path` through a temporary name.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp",
-        path.file_name().and_then(|n| n.to_str()).unwrap_or("file")
-    ));
-    std::fs::write(&tmp, bytes).map_err(|e| file_error(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))
+    use std::io::Write;
+    let (tmp, mut file) = files::Temporary::create(path)?;
+    file.write_all(bytes)
+        .map_err(|e| file_error(tmp.path(), e))?;
+    Ok(tmp.persist()?)
 }
 
 /// AdamW as the run's configuration sets it (eps and weight decay explicit: burn's defaults
@@ -63,9 +62,9 @@ pub fn save(
     state: &RunState,
 ) -> Result<()> {
     let name = format!("checkpoint-{:08}", state.step);
-    let tmp = run.join(format!(".{name}.tmp"));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).map_err(|e| file_error(&tmp, e))?;
+    let dir = run.join(&name);
+    let temporary = files::Temporary::create_dir(&dir)?;
+    let tmp = temporary.path().to_path_buf();
     let fail = |file: &str, e: &dyn std::fmt::Display| file_error(&tmp.join(file), e);
     model
         .clone()
@@ -81,9 +80,8 @@ pub fn save(
         .map_err(|e| fail("config.toml", &e))?;
     let json = serde_json::to_vec_pretty(state).expect("the run state serializes");
     std::fs::write(tmp.join("state.json"), json).map_err(|e| fail("state.json", &e))?;
-    let dir = run.join(&name);
     let _ = std::fs::remove_dir_all(&dir);
-    std::fs::rename(&tmp, &dir).map_err(|e| file_error(&dir, e))?;
+    temporary.persist()?;
     let pointer = Pointer {
         step: state.step,
         dir: name.clone(),
@@ -136,7 +134,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     if !pointer_path.exists() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(&pointer_path).map_err(|e| file_error(&pointer_path, e))?;
+    let text = files::read_to_string(&pointer_path, files::limits::TEXT, "text file")?;
     let pointer: Pointer = serde_json::from_str(&text)
         .map_err(|e| file_error(&pointer_path, format!("damaged: {e}")))?;
     let dir = run.join(&pointer.dir);
@@ -163,7 +161,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
         .try_load_file(dir.join("ema.bpk"))
         .map_err(|e| damaged("ema.bpk", &e))?;
     let state_path = dir.join("state.json");
-    let text = std::fs::read_to_string(&state_path).map_err(|e| file_error(&state_path, e))?;
+    let text = files::read_to_string(&state_path, files::limits::TEXT, "text file")?;
     let state: RunState = serde_json::from_str(&text)
         .map_err(|e| file_error(&state_path, format!("damaged: {e}")))?;
     if state.step != pointer.step {

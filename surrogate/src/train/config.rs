@@ -251,10 +251,11 @@ impl RunConfig {
 }
 
 fn read_text(path: &std::path::Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::Config {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })
+    Ok(files::read_to_string(
+        path,
+        files::limits::TEXT,
+        "run configuration",
+    )?)
 }
 
 #[cfg(test)]

@@ -18,7 +18,9 @@ use crate::model::Dit;
 
 /// Writes `model` to `path` (safetensors, PyTorch names), through a temporary name.
 pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
-    let tmp = path.with_file_name(".model.safetensors.tmp");
+    let (temporary, file) = files::Temporary::create(path)?;
+    drop(file);
+    let tmp = temporary.path().to_path_buf();
     let mut store = SafetensorsStore::from_file(&tmp)
         .overwrite(true)
         .with_to_adapter(BurnToPyTorchAdapter);
@@ -32,7 +34,7 @@ pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
         std::fs::set_permissions(&tmp, std::fs::Permissions::from_mode(0o644))
             .map_err(|e| file_error(&tmp, e))?;
     }
-    std::fs::rename(&tmp, path).map_err(|e| file_error(path, e))
+    Ok(temporary.persist()?)
 }
 
 /// The model of a run folder: `RUN/config.toml` and `RUN/model.safetensors`, on `device`.
@@ -89,7 +91,7 @@ impl TrainedModel {
     pub fn load(run: &Path, device: &Device) -> Result<Self> {
         let (config, model) = load_run(run, device)?;
         let path = run.join(TENSORS_MANIFEST);
-        let text = std::fs::read_to_string(&path).map_err(|e| file_error(&path, e))?;
+        let text = files::read_to_string(&path, files::limits::TEXT, "text file")?;
         let data: TensorManifest = serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
         let m = &config.model;
         let problem = if data.resolution != m.resolution {

@@ -149,7 +149,7 @@ fn write_log(run: &Path, log: &[LogLine]) -> Result<()> {
 
 fn read_log(run: &Path, up_to: usize) -> Result<Vec<LogLine>> {
     let path = run.join("log.jsonl");
-    let Ok(text) = std::fs::read_to_string(&path) else {
+    let Ok(text) = files::read_to_string(&path, files::limits::TEXT, "log") else {
         return Ok(Vec::new());
     };
     let mut log = Vec::new();

@@ -1,0 +1,82 @@
+//! User-named files, safely. Every loader of the project reads through [`read`] or
+//! [`read_to_string`], which refuse what is not a regular file (a FIFO would block, a device
+//! such as `/dev/zero` would never end) and anything larger than the caller's limit, before a
+//! byte is read. Every output goes through [`Temporary`]: written under a temporary name beside
+//! its destination, registered so that [`remove_temporaries`] (called from the signal handler
+//! of the command-line program) can delete it, and renamed into place only when complete.
+//! [`check_destination`] refuses, before any work, an output path that is anything but a
+//! regular file or nothing.
+//!
+//! Written by hand: the standard library has the pieces, no crate puts these checks together.
+
+mod destination;
+mod read;
+mod temporary;
+
+pub use destination::{Kind, check_destination, check_folder_destination};
+pub use read::{open, read, read_to_string};
+pub use temporary::{Temporary, remove_temporaries, temporary_name};
+
+use std::path::PathBuf;
+
+/// What is wrong with a file.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The operating system refused.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What it said.
+        source: std::io::Error,
+    },
+    /// The path is not a regular file.
+    #[error("{path}: is {kind}, not a regular file")]
+    NotAFile {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        kind: Kind,
+    },
+    /// The file is larger than the reader accepts.
+    #[error("{path}: {bytes} bytes, more than the {limit} bytes a {what} may have")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The limit.
+        limit: u64,
+        /// What the file was read as.
+        what: &'static str,
+    },
+    /// An output path holds something that must not be replaced.
+    #[error("{path}: is {kind}; refusing to replace it (give the path of a new or regular file)")]
+    Destination {
+        /// The path.
+        path: PathBuf,
+        /// What is there.
+        kind: Kind,
+    },
+    /// The process is stopping on a signal; no new temporary is started.
+    #[error("stopping on a signal")]
+    Stopping,
+}
+
+/// Limits of the files the project reads, bytes: far above any real file of the kind, far
+/// below what would exhaust the memory of a machine that reads it.
+pub mod limits {
+    /// A text file: scene configuration, dataset spec, manifest, run state (64 MiB).
+    pub const TEXT: u64 = 64 << 20;
+    /// A garment mesh (OBJ) or sewing pattern (JSON) (512 MiB).
+    pub const MESH: u64 = 512 << 20;
+    /// A NumPy `.npz` or `.npy` file: a body model or a motion (2 GiB).
+    pub const ARRAYS: u64 = 2 << 30;
+    /// A sequence recording (MCAP) (4 GiB).
+    pub const RECORDING: u64 = 4 << 30;
+    /// A training tensor shard or weights file (8 GiB).
+    pub const TENSORS: u64 = 8 << 30;
+}
+
+/// Result with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
