@@ -102,6 +102,7 @@ pub fn write_jsonl<T: serde::Serialize>(path: &Path, values: &[T]) -> Result<()>
 pub fn finished_record(dir: &DatasetDir, id: &str) -> Option<ManifestRecord> {
     let text = files::read_to_string(&dir.record(id), files::limits::TEXT, "record").ok()?;
     let record: ManifestRecord = serde_json::from_str(&text).ok()?;
+    record.check_paths().ok()?;
     if let (Some(file), Some(sha)) = (&record.file, &record.sha256) {
         let (actual, _) = sha256_file(&dir.root.join(file)).ok()?;
         if &actual != sha {

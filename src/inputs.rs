@@ -93,9 +93,9 @@ pub fn garment(
     }
     let path = Path::new(source);
     if source.ends_with(".obj") || path.exists() {
-        let raw = garments::read_obj(path)?;
-        let (template, _) =
-            garments::repair(&raw, 1.0).with_context(|| format!("garment file {source}"))?;
+        let (raw, numbers) = garments::read_obj_numbered(path)?;
+        let (template, _) = garments::repair_numbered(&raw, 1.0, Some(&numbers))
+            .map_err(|e| anyhow::anyhow!("garment file {source}: {e}"))?;
         return Ok((template, Vec::new()));
     }
     if !garments::BUILTIN.contains(&source) {

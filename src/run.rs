@@ -35,8 +35,8 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
 }
 
 /// The configuration the flags ask for: the defaults, or a `--config` file, or the
-/// configuration a `--config-from` recording carries, with every given flag over it. Not
-/// validated here: [`Scene::new`] validates it once (and `--print-config` before printing).
+/// configuration a `--config-from` recording carries, with every given flag over it;
+/// validated here, so a bad value is refused before a garment, motion or model is loaded.
 pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     let mut c = if let Some(path) = &args.config {
         SceneConfig::load(path)?
@@ -87,6 +87,7 @@ pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     if let Some(v) = args.self_friction {
         c.solver.self_friction = v;
     }
+    c.validate()?;
     Ok(c)
 }
 

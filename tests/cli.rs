@@ -434,7 +434,7 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
 /// them).
 #[test]
 fn recording_reads_in_python() {
-    if !common::python_has("mcap, numpy") {
+    if !common::python_has("cli::recording_reads_in_python", "mcap, numpy") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -283,14 +283,16 @@ fn browse(browser: &Path, page: &Path, work: &Path) -> (image::RgbImage, String)
 
 #[test]
 fn viewer_draws_the_garment_and_body_in_headless_chromium() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var("DIT_GARMENT_REQUIRE_BROWSER").is_err(),
-            "DIT_GARMENT_REQUIRE_BROWSER is set but no chromium was found"
-        );
-        eprintln!("skipped: no chromium (apt-get install chromium, or set CHROMIUM)");
+    let browser = chromium();
+    if !testkit::available(
+        "pictures::viewer_draws_the_garment_and_body_in_headless_chromium",
+        "BROWSER",
+        browser.is_some(),
+        "no chromium (apt-get install chromium, or set CHROMIUM)",
+    ) {
         return;
-    };
+    }
+    let browser = browser.expect("checked above");
     let dir = tempfile::tempdir().unwrap();
     let a = recording(dir.path(), "a.mcap", "k_s=100");
     let b = recording(dir.path(), "b.mcap", "k_s=40,rho=0.5");

@@ -186,7 +186,10 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
         3
     );
 
-    if common::python_has("safetensors, numpy") {
+    if common::python_has(
+        "surrogate_data::dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage",
+        "safetensors, numpy",
+    ) {
         let j = common::python_tool("read_tensors.py", &a);
         assert_eq!(j["train"]["targets"], serde_json::json!([8, 3, 64, 64]));
         assert_eq!(j["train"]["conditions"], serde_json::json!([8, dim]));

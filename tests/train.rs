@@ -230,7 +230,10 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     );
     std::fs::write(run.join("config.toml"), &config_text).unwrap();
 
-    if python_has("numpy, safetensors, tomllib") {
+    if python_has(
+        "train::train_writes_every_output_and_numpy_reproduces_the_model",
+        "numpy, safetensors, tomllib",
+    ) {
         let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/dit_reference.py");
         let check = |run: &Path| {
             std::process::Command::new("python3")

@@ -5,6 +5,7 @@
 //!
 //! | problem | repair |
 //! |---|---|
+//! | more than 50,000 vertices, or a vertex in more than 64 triangles (a fan) | none: refused |
 //! | non-finite positions or UVs, indices out of range | none: refused |
 //! | missing UVs | none: refused (templates need UVs for the surrogate) |
 //! | UVs outside [0, 1] | all UVs moved and scaled uniformly into [0, 1] |
@@ -14,7 +15,7 @@
 //! | non-manifold edges (three or more triangles) | none: refused |
 //! | inconsistent orientation between neighbours | flipped to agree with the first triangle of each connected piece; refused when no consistent orientation exists |
 //! | orientation pointing into the body (normals towards the piece's vertical axis) | the piece flipped |
-//! | implausible scale (largest extent over 3 m or under 5 cm, e.g. a file in cm) | refused unless a scale is given (`--scale 0.01`) |
+//! | implausible scale (largest extent over 3 m or under 5 cm, e.g. a file in cm) | refused (`garments check FILE --scale 0.01` tells whether a scale fixes it) |
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 
@@ -25,6 +26,12 @@ use crate::mesh::Garment;
 pub const MAX_EXTENT_M: f64 = 3.0;
 /// Smallest plausible garment extent, m.
 pub const MIN_EXTENT_M: f64 = 0.05;
+/// The most vertices a template may have: six times the largest library design; past it the
+/// engine's self-contact and intersection counts take minutes a frame.
+pub const MAX_TEMPLATE_VERTICES: usize = 50_000;
+/// The most triangles one vertex may be in (cloth meshes have 4 to 12): a vertex in more is
+/// the apex of a fan from a triangulated polygon, whose slivers no solver handles.
+pub const MAX_VERTEX_TRIANGLES: usize = 64;
 
 /// One kind of problem found, with how many and an example.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,6 +86,16 @@ impl CheckReport {
 
 /// Lists every problem of the mesh (see the module docs).
 pub fn check(g: &Garment) -> CheckReport {
+    check_numbered(g, None)
+}
+
+/// [`check`], naming vertices by `numbers` (the 1-based `v` number of each vertex in the OBJ
+/// file it was read from, see [`crate::read_obj_numbered`]) rather than by their index here.
+pub fn check_numbered(g: &Garment, numbers: Option<&[u32]>) -> CheckReport {
+    let vertex = |i: usize| match numbers.and_then(|n| n.get(i)) {
+        Some(k) => format!("OBJ vertex {k}"),
+        None => format!("vertex {i}"),
+    };
     let (lo, hi) = g.bounds();
     let extent = if g.positions.is_empty() {
         [0.0; 3]
@@ -87,12 +104,39 @@ pub fn check(g: &Garment) -> CheckReport {
     };
     let mut findings = Vec::new();
     let n = g.positions.len();
+    if n > MAX_TEMPLATE_VERTICES {
+        add(
+            &mut findings,
+            "too many vertices",
+            vec![format!("{n} vertices, at most {MAX_TEMPLATE_VERTICES}")],
+            None,
+        );
+    }
+    let mut triangles_of = vec![0usize; n];
+    for v in g.triangles.iter().flatten().filter(|&&v| (v as usize) < n) {
+        triangles_of[*v as usize] += 1;
+    }
+    add(
+        &mut findings,
+        "vertices in too many triangles",
+        (0..n)
+            .filter(|&i| triangles_of[i] > MAX_VERTEX_TRIANGLES)
+            .map(|i| {
+                format!(
+                    "{} in {} triangles, at most {MAX_VERTEX_TRIANGLES} (a fan of a large polygon)",
+                    vertex(i),
+                    triangles_of[i]
+                )
+            })
+            .collect(),
+        None,
+    );
     add(
         &mut findings,
         "non-finite positions",
         (0..n)
             .filter(|&i| !g.positions[i].iter().all(|c| c.is_finite()))
-            .map(|i| format!("vertex {i}"))
+            .map(vertex)
             .collect(),
         None,
     );
@@ -177,10 +221,7 @@ pub fn check(g: &Garment) -> CheckReport {
     add(
         &mut findings,
         "unreferenced vertices",
-        (0..n)
-            .filter(|&v| !used[v])
-            .map(|v| format!("vertex {v}"))
-            .collect(),
+        (0..n).filter(|&v| !used[v]).map(vertex).collect(),
         Some("removed"),
     );
     let kept: Vec<usize> = (0..g.triangles.len())
@@ -245,7 +286,8 @@ pub fn check(g: &Garment) -> CheckReport {
             "implausible scale",
             vec![format!(
                 "largest extent {largest:.3} (expected metres, {MIN_EXTENT_M}-{MAX_EXTENT_M}; \
-                 a file in cm needs --scale 0.01)"
+                 a file in cm must be rescaled to metres: `garments check FILE --scale 0.01` \
+                 tells whether that is enough)"
             )],
             None,
         );
@@ -263,6 +305,15 @@ pub fn check(g: &Garment) -> CheckReport {
 /// be repaired with an error listing every such problem. Returns the repaired garment and one
 /// line per repair made.
 pub fn repair(g: &Garment, scale: f64) -> Result<(Garment, Vec<String>)> {
+    repair_numbered(g, scale, None)
+}
+
+/// [`repair`], naming vertices in a refusal by their OBJ `v` numbers (see [`check_numbered`]).
+pub fn repair_numbered(
+    g: &Garment,
+    scale: f64,
+    numbers: Option<&[u32]>,
+) -> Result<(Garment, Vec<String>)> {
     if !(scale.is_finite() && scale > 0.0) {
         return Err(Error::Invalid(format!("scale {scale} is not positive")));
     }
@@ -272,7 +323,7 @@ pub fn repair(g: &Garment, scale: f64) -> Result<(Garment, Vec<String>)> {
             *c *= scale;
         }
     }
-    let report = check(&g);
+    let report = check_numbered(&g, numbers);
     if !report.repairable() {
         let refused: Vec<String> = report
             .findings

@@ -18,8 +18,11 @@ mod obj;
 pub mod pattern;
 
 pub use builtin::{BUILTIN, SkirtParams, builtin_names, skirt};
-pub use check::{CheckReport, Finding, MAX_EXTENT_M, MIN_EXTENT_M, check, repair};
+pub use check::{
+    CheckReport, Finding, MAX_EXTENT_M, MIN_EXTENT_M, check, check_numbered, repair,
+    repair_numbered,
+};
 pub use error::{Error, Result};
 pub use mesh::Garment;
-pub use obj::{read_obj, write_obj, write_ply};
+pub use obj::{read_obj, read_obj_numbered, write_obj, write_ply};
 pub use pattern::{Pattern, SewnMesh, joined_roots};

@@ -16,6 +16,13 @@ use crate::mesh::Garment;
 /// are refused here; [`crate::check`] reports what is wrong with the mesh itself (a file
 /// without `vt` lines reads with no UVs, which the check reports).
 pub fn read_obj(path: &Path) -> Result<Garment> {
+    read_obj_numbered(path).map(|(garment, _)| garment)
+}
+
+/// [`read_obj`], with the 1-based number of each vertex's `v` line in the file (the first
+/// line with its exact coordinates), so that errors name vertices as the user's file does:
+/// tobj copies vertices per group in the order faces use them, and seams are welded here.
+pub fn read_obj_numbered(path: &Path) -> Result<(Garment, Vec<u32>)> {
     let name = path.display().to_string();
     let options = tobj::LoadOptions {
         single_index: false,
@@ -101,7 +108,38 @@ pub fn read_obj(path: &Path) -> Result<Garment> {
         g.uvs.clear();
         g.uv_triangles.clear();
     }
-    Ok(g)
+    let numbers = vertex_numbers(text, &g.positions);
+    Ok((g, numbers))
+}
+
+/// The 1-based `v` line number of each position (tobj reads coordinates as f32), or an empty
+/// list if some position has no line (then errors fall back to internal indices).
+fn vertex_numbers(text: &[u8], positions: &[[f64; 3]]) -> Vec<u32> {
+    let mut first: HashMap<[u64; 3], u32> = HashMap::new();
+    let lines = text
+        .split(|&b| b == b'\n')
+        .filter_map(|l| std::str::from_utf8(l).ok());
+    let mut count = 0u32;
+    for line in lines {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        count += 1;
+        let c: Vec<f64> = words
+            .take(3)
+            .filter_map(|w| w.parse::<f32>().ok())
+            .map(f64::from)
+            .collect();
+        if let [x, y, z] = c[..] {
+            first.entry([x, y, z].map(f64::to_bits)).or_insert(count);
+        }
+    }
+    positions
+        .iter()
+        .map(|p| first.get(&p.map(f64::to_bits)).copied())
+        .collect::<Option<Vec<u32>>>()
+        .unwrap_or_default()
 }
 
 /// Writes the garment as OBJ text (v, vt, one `g` group per panel, f v/vt) to `out`, at

@@ -227,8 +227,12 @@ fn reading_a_file_names_it() {
 fn shared_garmentcode_examples_mesh_when_present() {
     let dir =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/testdata/garmentcode");
-    if !dir.exists() {
-        eprintln!("skipped: {} not found (optional fixture)", dir.display());
+    if !testkit::available(
+        "patterns::shared_garmentcode_examples_mesh_when_present",
+        "SHARED",
+        dir.exists(),
+        "../shared/testdata/garmentcode not found",
+    ) {
         return;
     }
     for name in ["shirt_mean", "dress_pencil"] {

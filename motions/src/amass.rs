@@ -20,6 +20,12 @@ use crate::npz::Npz;
 use crate::rotation::{axis_angle_to_quat, quat_to_axis_angle};
 use crate::skeleton::POSE_DIM;
 
+/// The source frame rates accepted, fps (AMASS files are 60 to 250 fps): outside them a file
+/// is damaged, and resampling it would size allocations from the damage.
+pub const MIN_SOURCE_FPS: f64 = 1.0;
+/// See [`MIN_SOURCE_FPS`].
+pub const MAX_SOURCE_FPS: f64 = 1000.0;
+
 /// Loads an AMASS file at its own frame rate, in SMPL-24 y-up form. `pelvis_rest` is J0, the
 /// rest pelvis joint of the shaped body that will wear the motion.
 pub fn load(path: &Path, pelvis_rest: [f64; 3]) -> Result<Motion> {
@@ -39,11 +45,13 @@ pub fn load(path: &Path, pelvis_rest: [f64; 3]) -> Result<Motion> {
         })?,
     };
     let fps = match fps_array.data.as_slice() {
-        [v] if v.is_finite() && *v > 0.0 => *v,
+        [v] if (MIN_SOURCE_FPS..=MAX_SOURCE_FPS).contains(v) => *v,
         other => {
             return Err(bad(
                 "mocap_framerate",
-                format!("frame rate must be one positive number, found {other:?}"),
+                format!(
+                    "frame rate must be one number from {MIN_SOURCE_FPS} to {MAX_SOURCE_FPS} fps, found {other:?}"
+                ),
             ));
         }
     };

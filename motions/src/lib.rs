@@ -24,7 +24,9 @@ mod skeleton;
 pub use body_model::{BodyModel, ModelArrays, boundary_edges};
 pub use error::{Error, Result};
 pub use forward::{FramePose, PosedBody, ShapedBody, Transform};
-pub use motion::{BlendIn, Motion, PoseWindow, canonical_a_pose};
+pub use motion::{
+    BlendIn, MAX_MOTION_FRAMES, MAX_PREFIX_FRAMES, Motion, PoseWindow, canonical_a_pose,
+};
 pub use skeleton::{
     JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index,
 };

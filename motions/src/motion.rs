@@ -75,6 +75,13 @@ pub struct PoseWindow {
     pub heading: f64,
 }
 
+/// The most frames a motion may have (an hour at 30 fps): more is a damaged file or a typo
+/// that would otherwise size allocations.
+pub const MAX_MOTION_FRAMES: usize = 108_000;
+
+/// Upper bound on blend-in and settle frames (an hour at 30 fps), for the same reason.
+pub const MAX_PREFIX_FRAMES: usize = 108_000;
+
 impl Motion {
     /// Builds a motion, checking that it is non-empty, finite and has a positive rate.
     pub fn new(name: impl Into<String>, fps: f64, frames: Vec<FramePose>) -> Result<Self> {
@@ -139,6 +146,14 @@ impl Motion {
     /// translations lerped between the two source frames around t. Works for any source rate
     /// (60, 100, 120, 250 fps ...), multiple of the target or not.
     pub fn resample(&self, fps: f64) -> Result<Motion> {
+        let frames = self.duration() * fps;
+        if frames > MAX_MOTION_FRAMES as f64 {
+            return Err(Error::Invalid(format!(
+                "'{}' resampled to {fps} fps would have {frames:.0} frames, more than the \
+                 {MAX_MOTION_FRAMES} a motion may have (an hour at 30 fps)",
+                self.name
+            )));
+        }
         if !(fps.is_finite() && fps > 0.0) {
             return Err(Error::Invalid(format!(
                 "target frame rate {fps} is not a positive number"

@@ -316,3 +316,24 @@ fn fortran_order_arrays_read_in_c_order() {
     }
     assert_eq!(a.data, expected, "read as {:?}", a.data);
 }
+
+/// A frame rate that would size the resampled motion past memory (1e-6 fps: 342 GB at 30
+/// fps) is refused by name, as is a resample to more frames than a motion may have.
+#[test]
+fn frame_rates_that_would_exhaust_memory_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("slow.npz");
+    amass_file(&path, 3, 1e-6, "mocap_framerate");
+    let err = motions::amass::load(&path, [0.0; 3])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("slow.npz") && err.contains("mocap_framerate") && err.contains("1 to 1000"),
+        "{err}"
+    );
+    let fine = dir.path().join("fine.npz");
+    amass_file(&fine, 3, 1.0, "mocap_framerate");
+    let motion = motions::amass::load(&fine, [0.0; 3]).unwrap();
+    let err = motion.resample(1e6).unwrap_err().to_string();
+    assert!(err.contains("more than the 108000"), "{err}");
+}

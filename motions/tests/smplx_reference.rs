@@ -15,10 +15,16 @@ fn reference_dir() -> Option<PathBuf> {
 
 #[test]
 fn forward_pass_matches_smplx_reference_cases() {
-    let Some(dir) = reference_dir() else {
-        eprintln!("SKIPPED: ../shared/testdata/smplx_reference not found");
+    let dir = reference_dir();
+    if !testkit::available(
+        "smplx_reference::forward_pass_matches_smplx_reference_cases",
+        "SHARED",
+        dir.is_some(),
+        "../shared/testdata/smplx_reference not found",
+    ) {
         return;
-    };
+    }
+    let dir = dir.expect("checked above");
     let model = BodyModel::load(&dir.join("SMPL_NEUTRAL.npz")).unwrap();
     let mut reference = Npz::open(&dir.join("smplx_reference.npz")).unwrap();
     let cases = reference.numeric("num_cases").unwrap().unwrap().data[0] as usize;

@@ -90,9 +90,10 @@ impl Default for SceneConfig {
     }
 }
 
-/// Upper bound on blend-in and settle frames (an hour at 30 fps): larger values are typos that
-/// would otherwise size allocations.
-pub const MAX_PREFIX_FRAMES: usize = 108_000;
+pub use motions::MAX_PREFIX_FRAMES;
+
+/// The most output frames a scene may ask for: the longest motion and both prefixes.
+pub const MAX_FRAMES: usize = motions::MAX_MOTION_FRAMES + 2 * MAX_PREFIX_FRAMES;
 
 impl SceneConfig {
     /// Checks every value, naming the key and the bad value in the error.
@@ -117,8 +118,16 @@ impl SceneConfig {
                 "must be finite",
             ));
         }
-        if self.frames == Some(0) {
-            return Err(Error::value("frames", 0, "must be at least 1"));
+        match self.frames {
+            Some(0) => return Err(Error::value("frames", 0, "must be at least 1")),
+            Some(n) if n > MAX_FRAMES => {
+                return Err(Error::value(
+                    "frames",
+                    n,
+                    &format!("must be at most {MAX_FRAMES} (a motion and both prefixes)"),
+                ));
+            }
+            _ => {}
         }
         for (key, value) in [
             ("blend_frames", self.blend_frames),

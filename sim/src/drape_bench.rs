@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::constraints::bending::RIGIDITY_PER_KB;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::obstacles::{Obstacles, Sphere};
 use crate::params::{Material, SolverParams};
 use crate::solver::{ClothSetup, Solver, StageTimes};
@@ -25,6 +25,10 @@ pub const CLOTH_HEIGHT: f64 = 1.0;
 pub const MEMBRANE_EH: f64 = 990.0;
 /// Bending rigidity B, N m.
 pub const BENDING_B: f64 = 9.9e-6;
+
+/// The most vertices per side of the cloth (262,144 vertices; the published runs use 32 to
+/// 128): more would size allocations past any machine's memory.
+pub const MAX_GRID_N: usize = 512;
 
 /// Settings of one drape-bench run.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -65,6 +69,13 @@ impl DrapeBench {
     pub fn run(&self) -> Result<DrapeResult> {
         self.params.validate()?;
         let n = self.n;
+        if !(2..=MAX_GRID_N).contains(&n) {
+            return Err(Error::value(
+                "n",
+                n,
+                &format!("must be 2 to {MAX_GRID_N} vertices per side"),
+            ));
+        }
         let mesh = ClothMesh::grid(n, 1.0, CLOTH_HEIGHT)?;
         let setup_started = Instant::now();
         let mut solver = Solver::new(

@@ -173,6 +173,15 @@ fn directed(from: &SurfaceSamples, to: &SurfaceSamples, tree: &Tree) -> (f64, f6
     (sq / n, d / n, nc / n)
 }
 
+/// The symmetric sample terms: E_CD (sum of both directions' mean squared distances, x 100),
+/// E_CD_cm (mean of both directions' mean distances, cm) and E_n (sum of both directions'
+/// mean 1 - |cos|).
+fn chamfer(a: &SurfaceSamples, b: &SurfaceSamples) -> (f64, f64, f64) {
+    let (sq1, d1, n1) = directed(a, b, &b.tree());
+    let (sq2, d2, n2) = directed(b, a, &a.tree());
+    (100.0 * (sq1 + sq2), 100.0 * 0.5 * (d1 + d2), n1 + n2)
+}
+
 fn area_and_centroid(v: &[P3], tris: &[[u32; 3]]) -> (Vec<f64>, P3) {
     let mut areas = Vec::with_capacity(tris.len());
     let mut c = [0.0; 3];
@@ -329,9 +338,7 @@ impl Scorer {
         let sp = SurfaceSamples::new(pred, &self.triangles, self.samples, seed);
         // The same stream for both meshes: identical meshes get identical samples (E_CD = 0).
         let sg = SurfaceSamples::new(gt, &self.triangles, self.samples, seed);
-        let (tp, tg) = (sp.tree(), sg.tree());
-        let (sq1, d1, n1) = directed(&sp, &sg, &tg);
-        let (sq2, d2, n2) = directed(&sg, &sp, &tp);
+        let (e_cd, e_cd_cm, e_n) = chamfer(&sp, &sg);
         let (ap, cp) = area_and_centroid(pred, &self.triangles);
         let (ag, cg) = area_and_centroid(gt, &self.triangles);
         let (dp, dg) = (dihedrals(pred, &self.edges), dihedrals(gt, &self.edges));
@@ -351,9 +358,9 @@ impl Scorer {
         };
         Scores {
             E_v: e_v,
-            E_CD: 100.0 * (sq1 + sq2),
-            E_CD_cm: 100.0 * 0.5 * (d1 + d2),
-            E_n: n1 + n2,
+            E_CD: e_cd,
+            E_CD_cm: e_cd_cm,
+            E_n: e_n,
             E_c: e_c,
             E_c_vertex: e_c_vertex,
             E_b: e_b,
@@ -472,13 +479,19 @@ mod tests {
     #[test]
     fn flipped_and_tilted_patches_give_the_normal_term() {
         let (v, t) = patch(11, 0.0);
-        let flipped: Vec<[u32; 3]> = t.iter().map(|f| [f[0], f[2], f[1]]).collect();
-        // Orientation is ignored (|cos|): a flipped patch scores 0.
+        // Orientation is ignored (|cos|): the patch mirrored in x lies in the same plane with
+        // every normal reversed (cos = -1 exactly), and scores 0 where plain cos would give
+        // 2 per direction.
         let scorer = Scorer::new(&v, &t, 3).with_samples(5000);
-        let s = Scorer::new(&v, &flipped, 3)
-            .with_samples(5000)
-            .frame(&v, &v, None, 0);
-        assert!(s.E_n < 1e-12, "{}", s.E_n);
+        let mirrored: Vec<P3> = v.iter().map(|p| [1.0 - p[0], p[1], p[2]]).collect();
+        let s = scorer.frame(&mirrored, &v, None, 0);
+        assert!(
+            s.E_n < 1e-12,
+            "E_n {} (4 if the sign of cos counted)",
+            s.E_n
+        );
+        // Mean |1 - 2x| over x = i / 10: 6/11 m.
+        assert!((s.E_v - 100.0 * 6.0 / 11.0).abs() < 1e-9, "E_v {}", s.E_v);
         // Tilted by 30 degrees about the x axis: each direction contributes 1 - cos 30.
         let a = 30f64.to_radians();
         let tilted: Vec<P3> = v
@@ -511,6 +524,83 @@ mod tests {
         let (outer, _) = sphere(0.6, [0.0, 0.0, 0.0]);
         let s = scorer.frame(&outer, &outer, Some(&body), 0);
         assert!(s.E_c == 0.0 && s.E_c_vertex == 0.0, "{s:?}");
+    }
+
+    /// Two different point sets (2 and 3 points, so a sum or a one-sided mean would show):
+    /// A -> B has squared distances 0 and 0.01 and normal terms 0 and 0.2; B -> A has 0, 0.25
+    /// and 0.01, and 0, 0 and 0.2.
+    #[test]
+    fn chamfer_of_different_shapes_matches_the_hand_values() {
+        let a = SurfaceSamples {
+            points: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+            normals: vec![[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+        };
+        let b = SurfaceSamples {
+            points: vec![[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.0, 0.1, 0.0]],
+            normals: vec![[0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.6, 0.8, 0.0]],
+        };
+        let (e_cd, e_cd_cm, e_n) = chamfer(&a, &b);
+        let expected_cd = 100.0 * (0.01 / 2.0 + 0.26 / 3.0);
+        assert!(
+            (e_cd - expected_cd).abs() < 1e-9,
+            "E_CD {e_cd} expected {expected_cd}"
+        );
+        assert!(
+            (e_cd_cm - 12.5).abs() < 1e-9,
+            "E_CD_cm {e_cd_cm} expected 12.5"
+        );
+        let expected_n = 0.2 / 2.0 + 0.2 / 3.0;
+        assert!(
+            (e_n - expected_n).abs() < 1e-12,
+            "E_n {e_n} expected {expected_n}"
+        );
+        assert_eq!(chamfer(&b, &a), (e_cd, e_cd_cm, e_n), "symmetric");
+    }
+
+    /// A patch half inside a box (the box's face at x = 0.45 cuts the patch's columns
+    /// x = 0, 0.1, ..., 1): 5 of 11 columns are inside, and the area-uniform samples inside
+    /// are the share of area at x < 0.45.
+    #[test]
+    fn a_patch_half_inside_a_box_collides_by_its_share() {
+        let (lo, hi) = ([-1.0, -0.5, -1.0], [0.45, 0.5, 2.0]);
+        let box_v: Vec<P3> = (0..8)
+            .map(|k| {
+                [
+                    if k & 1 == 1 { hi[0] } else { lo[0] },
+                    if k & 2 == 2 { hi[1] } else { lo[1] },
+                    if k & 4 == 4 { hi[2] } else { lo[2] },
+                ]
+            })
+            .collect();
+        let box_t = [
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5],
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3],
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6],
+        ];
+        let body = BodySurface {
+            vertices: &box_v,
+            triangles: &box_t,
+        };
+        let (v, t) = patch(11, 0.0);
+        let s = Scorer::new(&v, &t, 7)
+            .with_samples(20_000)
+            .frame(&v, &v, Some(&body), 0);
+        assert!(
+            (s.E_c_vertex - 100.0 * 55.0 / 121.0).abs() < 1e-9,
+            "E_c_vertex {}",
+            s.E_c_vertex
+        );
+        // Binomial spread of 20,000 samples: 0.35 points.
+        assert!((s.E_c - 45.0).abs() < 1.5, "E_c {}", s.E_c);
     }
 
     #[test]
@@ -547,7 +637,21 @@ mod tests {
         let s = Scorer::new(&v, &t, 1)
             .with_samples(1000)
             .frame(&folded, &v, None, 0);
-        assert!(s.E_b > 0.1, "{}", s.E_b);
+        // The strip folds up along (0.8, 0.6): the two interior edges on x = 0.5 bend by
+        // theta = atan2(0.6, 0.8), the other six not at all, so E_b = sqrt(2 theta^2 / 8).
+        let theta = 0.6f64.atan2(0.8);
+        assert!(
+            (s.E_b - theta / 2.0).abs() < 1e-12,
+            "E_b {} expected {}",
+            s.E_b,
+            theta / 2.0
+        );
+        let d = dihedrals(&folded, &interior_edges(&t));
+        let bent: Vec<f64> = d.iter().copied().filter(|a| a.abs() > 1e-12).collect();
+        assert!(
+            d.len() == 8 && bent.len() == 2 && bent.iter().all(|a| (a + theta).abs() < 1e-12),
+            "{d:?}"
+        );
         let back = Scorer::new(&v, &t, 1)
             .with_samples(1000)
             .frame(&v, &folded, None, 0);

@@ -151,12 +151,19 @@ fn check_record(
     if r.ok() && r.file.is_none() {
         problem("passed but has no recording".into());
     }
+    if let Err(e) = r.check_paths() {
+        problem(e);
+        return problems;
+    }
     let Some(file) = &r.file else {
         return problems;
     };
     let path = dir.root.join(file);
     match sha256_file(&path) {
-        Err(_) => problem(format!("recording {file} is missing")),
+        Err(e) => {
+            problem(format!("recording {file} is unreadable: {e:#}"));
+            return problems;
+        }
         Ok((sha, bytes)) => {
             if Some(&sha) != r.sha256.as_ref() || bytes != r.bytes {
                 problem(format!(
@@ -388,6 +395,8 @@ fn merge(out: &Path, roots: &[std::path::PathBuf]) -> Result<()> {
     copy_into(&dirs[0].plan(), &target.plan())?;
     let mut records = Vec::with_capacity(found.len());
     for (d, r) in found {
+        r.check_paths()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", d.manifest().display()))?;
         if let Some(file) = &r.file {
             copy_into(&d.root.join(file), &target.root.join(file))?;
         }

@@ -9,7 +9,12 @@ use crate::cli::DrapeBenchArgs;
 use crate::output::{write_atomic, write_json};
 
 pub fn run(args: &DrapeBenchArgs) -> Result<()> {
-    anyhow::ensure!(args.n >= 2, "--n must be at least 2, got {}", args.n);
+    let max = sim::drape_bench::MAX_GRID_N;
+    anyhow::ensure!(
+        (2..=max).contains(&args.n),
+        "--n {}: must be 2 to {max} vertices per side",
+        args.n
+    );
     let mut bench = DrapeBench::new(args.n);
     bench.params.substeps = args.substeps;
     bench.params.max_iterations = args.iterations;

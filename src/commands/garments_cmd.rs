@@ -162,7 +162,7 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
     let model = BodyModel::default_body();
     let mesh = pattern
         .mesh(edge_length)
-        .with_context(|| format!("meshing '{}'", pattern.name))?;
+        .map_err(|e| anyhow::anyhow!("{source}: {e}"))?;
     let mesh_s = started.elapsed().as_secs_f64();
     eprintln!(
         "{}: {} panels, {} vertices before sewing; sewing and draping ...",
@@ -220,7 +220,9 @@ fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
     let shown = file.display().to_string();
     if file.extension().is_some_and(|e| e == "json") {
         let pattern = Pattern::read(file)?;
-        let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
+        let mesh = pattern
+            .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)
+            .map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
         say!(
             "{shown}: a valid sewing pattern: {} panels, {} stitches, {} vertices at {} m edges",
             pattern.panels.len(),
@@ -230,11 +232,11 @@ fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
         );
         return Ok(());
     }
-    let mut raw = garments::read_obj(file)?;
+    let (mut raw, numbers) = garments::read_obj_numbered(file)?;
     for p in &mut raw.positions {
         *p = p.map(|c| c * scale);
     }
-    let report = garments::check(&raw);
+    let report = garments::check_numbered(&raw, Some(&numbers));
     let out = CheckOutput {
         file: shown.clone(),
         usable: report.repairable(),

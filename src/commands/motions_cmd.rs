@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use motions::library::{MOTIONS, MotionSpec};
-use motions::{BlendIn, JOINT_NAMES, Motion, NUM_JOINTS, canonical_a_pose};
+use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES, Motion, NUM_JOINTS, canonical_a_pose};
 use serde_json::json;
 use sim::recording::{BodySequenceMeta, Channels, FrameRecord, SequenceWriter, UNITS};
 
@@ -27,6 +27,15 @@ pub fn run(command: MotionsCommand) -> Result<()> {
             settle_frames,
             json,
         } => {
+            for (flag, value) in [
+                ("--blend-frames", blend_frames),
+                ("--settle-frames", settle_frames),
+            ] {
+                anyhow::ensure!(
+                    value <= MAX_PREFIX_FRAMES,
+                    "{flag} {value}: at most {MAX_PREFIX_FRAMES} (an hour at 30 fps)"
+                );
+            }
             let model = inputs::body_model(model.model.as_deref())?;
             let shaped = model.shape(&betas)?;
             let mut m = inputs::motion(&motion, &model, &shaped)?;

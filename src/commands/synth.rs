@@ -287,7 +287,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let spec = DatasetSpec::load(spec_path)?;
     let (k, n) = shard(args)?;
     let motions = expand_motions(&spec).with_context(|| format!("{}", spec_path.display()))?;
-    let planned = plan(&spec, &motions);
+    let planned = plan(&spec, &motions).with_context(|| format!("{}", spec_path.display()))?;
     let dir = DatasetDir::new(out);
     // Everything the spec names is checked before the folder is touched, so a refused spec
     // (a typo in a motion or garment, another spec's folder) leaves the folder as it was.

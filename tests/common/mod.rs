@@ -75,22 +75,21 @@ pub fn jsonl(path: &Path) -> Vec<Value> {
         .collect()
 }
 
-/// Whether `python3` can import `modules` (comma-separated). Where it cannot, the caller skips
-/// its Python check, unless `DIT_GARMENT_REQUIRE_PYTHON` is set (`.ci/run` sets it after
-/// installing the packages), which makes a missing package a failure instead of a skip.
-pub fn python_has(modules: &str) -> bool {
+/// Whether `python3` can import `modules` (comma-separated) for the Python part of `test`.
+/// Where it cannot, the caller skips that part, recorded by `testkit::available`, unless
+/// `DIT_GARMENT_REQUIRE_PYTHON` is set (`.ci/run` sets it after installing the packages),
+/// which makes a missing package a failure instead.
+pub fn python_has(test: &str, modules: &str) -> bool {
     let found = std::process::Command::new("python3")
         .args(["-c", &format!("import {modules}")])
         .status()
         .is_ok_and(|s| s.success());
-    if !found {
-        assert!(
-            std::env::var_os("DIT_GARMENT_REQUIRE_PYTHON").is_none(),
-            "python3 cannot import {modules}, and DIT_GARMENT_REQUIRE_PYTHON is set"
-        );
-        eprintln!("skipped: python3 with {modules} not available");
-    }
-    found
+    testkit::available(
+        test,
+        "PYTHON",
+        found,
+        &format!("python3 cannot import {modules}"),
+    )
 }
 
 /// Runs one of `tools/*.py` on `arg`, asserts success and parses the JSON it prints.

@@ -31,7 +31,32 @@ pub struct SewnMesh {
     pub stitch_pairs: Vec<[u32; 2]>,
 }
 
+/// The most vertices a pattern may mesh into (the library's templates have 3,000 to 8,000 at
+/// the default edge length).
+pub const MAX_PATTERN_VERTICES: usize = 100_000;
+
 impl Pattern {
+    /// The largest extent of any panel's corners, m (for errors).
+    fn extent_m(&self) -> String {
+        let extent = self
+            .panels
+            .iter()
+            .flat_map(|p| {
+                let (lo, hi) =
+                    p.vertices
+                        .iter()
+                        .fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), v| {
+                            (
+                                [lo[0].min(v[0]), lo[1].min(v[1])],
+                                [hi[0].max(v[0]), hi[1].max(v[1])],
+                            )
+                        });
+                [hi[0] - lo[0], hi[1] - lo[1]]
+            })
+            .fold(0.0f64, f64::max);
+        format!("{:.3}", extent * self.metres_per_unit)
+    }
+
     /// Meshes every panel at `edge_length_m` and lists the stitched vertex pairs.
     pub fn mesh(&self, edge_length_m: f64) -> Result<SewnMesh> {
         if !(edge_length_m.is_finite() && edge_length_m > 0.0) {
@@ -40,6 +65,25 @@ impl Pattern {
             )));
         }
         let target = edge_length_m / self.metres_per_unit;
+        // The size of the result, estimated before anything is allocated: a pattern in the
+        // wrong units, a wild curvature or a tiny edge length would otherwise mesh for hours.
+        let max_area = 3f64.sqrt() / 4.0 * target * target;
+        let estimate: f64 = self
+            .panels
+            .iter()
+            .map(|p| {
+                let outline: f64 = (0..p.edges.len()).map(|e| p.edge_length(e) / target).sum();
+                outline + signed_area(&p.vertices).abs() / max_area
+            })
+            .sum();
+        if !(estimate <= MAX_PATTERN_VERTICES as f64) {
+            return Err(Error::Pattern(format!(
+                "meshing at {edge_length_m} m would make about {estimate:.3e} vertices, more \
+                 than {MAX_PATTERN_VERTICES}: the pattern is {} m across (its units or \
+                 curvatures are wrong) or the edge length is too small",
+                self.extent_m()
+            )));
+        }
         // Vertex count per edge; stitched edges take the larger of the two.
         let mut counts: Vec<Vec<usize>> = self
             .panels

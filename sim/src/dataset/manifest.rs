@@ -152,6 +152,23 @@ impl ManifestRecord {
     pub fn ok(&self) -> bool {
         self.status == "ok"
     }
+
+    /// Checks that the id is a plain file name and the recording (if any) is
+    /// `sequences/<id>.mcap`, so a damaged or hostile manifest never points a reader (or a
+    /// merge's copy) outside the dataset folder.
+    pub fn check_paths(&self) -> std::result::Result<(), String> {
+        let id = &self.id;
+        let plain = !id.is_empty() && id != "." && id != ".." && !id.contains(['/', '\\', '\0']);
+        if !plain {
+            return Err(format!("sequence id {id:?} is not a plain file name"));
+        }
+        match &self.file {
+            Some(file) if *file != format!("sequences/{id}.mcap") => Err(format!(
+                "sequence {id}: recording {file:?} is not sequences/{id}.mcap"
+            )),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// Counts, histograms and totals over manifest records (the `dataset stats` report).

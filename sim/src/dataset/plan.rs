@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::spec::{DatasetSpec, MaterialRanges, Tag};
+use super::spec::{DatasetSpec, MAX_PLANNED_SEQUENCES, MaterialRanges, Tag};
 use crate::params::Material;
 use crate::{Error, Result};
 
@@ -136,8 +136,37 @@ pub fn expand_motions(spec: &DatasetSpec) -> Result<Vec<(String, Tag)>> {
 }
 
 /// Every sequence of the dataset, training first, then the test sets.
-pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Vec<PlannedSequence> {
+///
+/// A plan of more than [`MAX_PLANNED_SEQUENCES`] sequences is refused before it is built.
+pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<PlannedSequence>> {
     let s = &spec.sequence;
+    let train_motions = motions.iter().filter(|m| m.1 == Tag::Train).count();
+    let sp = &spec.splits;
+    let count = [
+        sp.test,
+        sp.test_garment,
+        sp.test_motion,
+        sp.test_shape,
+        sp.test_material,
+    ]
+    .into_iter()
+    .fold(
+        train_motions
+            .checked_mul(s.shapes_per_motion)
+            .and_then(|n| n.checked_mul(s.draws_per_shape)),
+        |total, n| total.and_then(|t| t.checked_add(n)),
+    )
+    .filter(|&n| n <= MAX_PLANNED_SEQUENCES);
+    if count.is_none() {
+        return Err(Error::value(
+            "plan",
+            format!(
+                "{train_motions} training motions x {} shapes x {} draws + the test splits",
+                s.shapes_per_motion, s.draws_per_shape
+            ),
+            &format!("must hold at most {MAX_PLANNED_SEQUENCES} sequences"),
+        ));
+    }
     let pick = |list: Vec<&String>, rng: &mut ChaCha8Rng| -> String {
         list[rng.random_range(0..list.len())].clone()
     };
@@ -254,7 +283,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Vec<PlannedSequenc
             out.push(sequence(split, key, name, garment, motion, b, m));
         }
     }
-    out
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -301,8 +330,8 @@ mod tests {
     fn plan_is_reproducible_and_splits_keep_unseen_factors_out_of_training() {
         let spec = spec();
         let motions = expand_motions(&spec).unwrap();
-        let a = plan(&spec, &motions);
-        assert_eq!(a, plan(&spec, &motions), "same spec, same plan");
+        let a = plan(&spec, &motions).unwrap();
+        assert_eq!(a, plan(&spec, &motions).unwrap(), "same spec, same plan");
         assert_eq!(a.iter().filter(|p| p.split == "train").count(), 2 * 3 * 3);
         assert_eq!(a.len(), 18 + 2 + 1 + 1 + 1 + 1);
         let ids: std::collections::HashSet<_> = a.iter().map(|p| &p.id).collect();
@@ -325,7 +354,7 @@ mod tests {
         assert_ne!(a[0].betas, a[3].betas);
         let mut other = spec.clone();
         other.seed = 8;
-        assert_ne!(plan(&other, &motions)[0].betas, a[0].betas);
+        assert_ne!(plan(&other, &motions).unwrap()[0].betas, a[0].betas);
         // Adding a motion does not change the existing sequences.
         let mut more = spec.clone();
         more.motions.push(MotionEntry {
@@ -333,7 +362,7 @@ mod tests {
             variants: vec![],
             split: Tag::Train,
         });
-        let b = plan(&more, &expand_motions(&more).unwrap());
+        let b = plan(&more, &expand_motions(&more).unwrap()).unwrap();
         for p in a.iter().filter(|p| p.split == "train") {
             assert!(b.contains(p), "{} changed", p.id);
         }

@@ -106,6 +106,14 @@ impl Default for MaterialRanges {
     }
 }
 
+/// The most shapes per motion, and draws per shape, a spec may ask for.
+pub const MAX_DRAWS: usize = 1_000;
+/// The most sequences a plan may hold (a plan entry is about 400 bytes; a million sequences
+/// is five times the paper's dataset).
+pub const MAX_PLANNED_SEQUENCES: usize = 1_000_000;
+/// The most retries per sequence.
+pub const MAX_RETRIES: usize = 8;
+
 /// Solver settings of every sequence: the keys of a scene configuration's `[solver]` table
 /// (docs/DATASETS.md has the mapping).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -266,10 +274,48 @@ impl DatasetSpec {
         if s.frames == Some(0) {
             return Err("sequence.frames must be at least 1".into());
         }
-        if s.shapes_per_motion == 0 || s.draws_per_shape == 0 {
-            return Err(
-                "sequence.shapes_per_motion and sequence.draws_per_shape must be >= 1".into(),
-            );
+        for (key, n) in [
+            ("sequence.shapes_per_motion", s.shapes_per_motion),
+            ("sequence.draws_per_shape", s.draws_per_shape),
+        ] {
+            if !(1..=MAX_DRAWS).contains(&n) {
+                return Err(format!("{key} = {n} is outside 1..={MAX_DRAWS}"));
+            }
+        }
+        if let Some(n) = s.frames.filter(|&n| n > crate::config::MAX_FRAMES) {
+            return Err(format!(
+                "sequence.frames = {n} is more than {}",
+                crate::config::MAX_FRAMES
+            ));
+        }
+        for (key, n) in [
+            ("sequence.blend_frames", s.blend_frames),
+            ("sequence.settle_frames", s.settle_frames),
+        ] {
+            if n > crate::config::MAX_PREFIX_FRAMES {
+                return Err(format!(
+                    "{key} = {n} is more than {} (an hour at 30 fps)",
+                    crate::config::MAX_PREFIX_FRAMES
+                ));
+            }
+        }
+        let sp = &self.splits;
+        for (key, n) in [
+            ("splits.test", sp.test),
+            ("splits.test_garment", sp.test_garment),
+            ("splits.test_motion", sp.test_motion),
+            ("splits.test_shape", sp.test_shape),
+            ("splits.test_material", sp.test_material),
+        ] {
+            if n > MAX_PLANNED_SEQUENCES {
+                return Err(format!("{key} = {n} is more than {MAX_PLANNED_SEQUENCES}"));
+            }
+        }
+        if self.gates.retries > MAX_RETRIES {
+            return Err(format!(
+                "gates.retries = {} is more than {MAX_RETRIES}",
+                self.gates.retries
+            ));
         }
         if s.betas > 300 {
             return Err(format!("sequence.betas = {} is more than 300", s.betas));

@@ -232,7 +232,10 @@ pub(super) fn catenary(long: bool) -> Result<Vec<Outcome>> {
 /// miss: bending-dominated statics need converged steps (docs/REGRESSION.md).
 pub(super) fn cantilever(long: bool) -> Result<Vec<Outcome>> {
     let (k_b, rho) = (1e-4, 0.01);
-    let c = (crate::constraints::bending::RIGIDITY_PER_KB * k_b / (rho * G)).cbrt();
+    // B from the documented definition (docs/PHYSICS.md), written out rather than taken from
+    // the solver's constant: a wrong factor there changes the angle (67 degrees at B = k_b).
+    let rigidity = 2.0 * 3f64.sqrt() * k_b;
+    let c = (rigidity / (rho * G)).cbrt();
     let edges = 40;
     let spacing = 2.0 * c / edges as f64;
     let (columns, rows) = (edges + 2, 9);

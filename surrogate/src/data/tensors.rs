@@ -251,6 +251,7 @@ fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
     records
         .into_par_iter()
         .map(|r| {
+            r.check_paths().map_err(|e| file_error(&path, e))?;
             let (Some(file), Some(sha)) = (&r.file, &r.sha256) else {
                 return Err(file_error(
                     &path,
