@@ -23,14 +23,24 @@ pub fn read_obj(path: &Path) -> Result<Garment> {
 /// line with its exact coordinates), so that errors name vertices as the user's file does:
 /// tobj copies vertices per group in the order faces use them, and seams are welded here.
 pub fn read_obj_numbered(path: &Path) -> Result<(Garment, Vec<u32>)> {
-    let name = path.display().to_string();
+    let text = files::read(path, files::limits::MESH, "mesh")?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    parse_obj(&text, &path.display().to_string(), &stem)
+}
+
+/// [`read_obj_numbered`] of OBJ text already in memory: `name` names it in errors, `stem`
+/// names the garment and its ungrouped panel.
+pub fn parse_obj(text: &[u8], name: &str, stem: &str) -> Result<(Garment, Vec<u32>)> {
+    let name = name.to_string();
     let options = tobj::LoadOptions {
         single_index: false,
         triangulate: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let text = files::read(path, files::limits::MESH, "mesh")?;
     // A byte-order mark (some Windows editors write one) is not part of the first line.
     let text = text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&text);
     // Materials are not used: a `mtllib` line reads nothing.
@@ -46,10 +56,7 @@ pub fn read_obj_numbered(path: &Path) -> Result<(Garment, Vec<u32>)> {
             message: "no faces".into(),
         });
     }
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let stem = stem.to_string();
     let mut g = Garment {
         name: stem.clone(),
         ..Garment::default()

@@ -29,7 +29,16 @@ pub const MAX_SOURCE_FPS: f64 = 1000.0;
 /// Loads an AMASS file at its own frame rate, in SMPL-24 y-up form. `pelvis_rest` is J0, the
 /// rest pelvis joint of the shaped body that will wear the motion.
 pub fn load(path: &Path, pelvis_rest: [f64; 3]) -> Result<Motion> {
-    let mut npz = Npz::open(path)?;
+    from_npz(Npz::open(path)?, pelvis_rest)
+}
+
+/// [`load`] from an archive already open (its path names it in errors and in the motion).
+pub fn from_npz<R: std::io::Read + std::io::Seek>(
+    mut npz: Npz<R>,
+    pelvis_rest: [f64; 3],
+) -> Result<Motion> {
+    let path = npz.path().to_path_buf();
+    let path = path.as_path();
     let bad = |key: &str, problem: String| Error::BadArray {
         path: path.to_path_buf(),
         key: key.to_string(),

@@ -74,6 +74,13 @@ impl BodyModel {
         Ok(model)
     }
 
+    /// [`load`](Self::load) of an `.npz` already in memory; `path` names it in errors.
+    pub fn from_npz_bytes(bytes: &[u8], path: &Path) -> Result<Self> {
+        let mut model = Self::from_npz_reader(Cursor::new(bytes), path)?;
+        model.name = path.display().to_string();
+        Ok(model)
+    }
+
     fn from_npz_reader<R: std::io::Read + std::io::Seek>(reader: R, path: &Path) -> Result<Self> {
         let mut npz = Npz::from_reader(reader, path)?;
         Self::read(&mut npz)

@@ -22,6 +22,14 @@ pub struct Array {
 pub struct Npz<R: Read + Seek> {
     path: PathBuf,
     archive: NpzArchive<R>,
+    /// Bytes an array may decode to (see [`array_byte_limit`]).
+    array_limit: u64,
+}
+
+/// The most bytes one array may decode to: 256 MiB, or 64 times the archive's size (real
+/// body models compress a few times at most), so a damaged shape never sizes an allocation.
+fn array_byte_limit(archive_bytes: u64) -> u64 {
+    (256u64 << 20).max(archive_bytes.saturating_mul(64))
 }
 
 impl Npz<std::io::BufReader<std::fs::File>> {
@@ -47,21 +55,21 @@ impl Npz<std::io::BufReader<std::fs::File>> {
                 path: path.to_path_buf(),
             });
         }
-        let archive = NpzArchive::open(path).map_err(|e| Error::NotNpz {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
-        Ok(Self {
-            path: path.to_path_buf(),
-            archive,
-        })
+        // The file already opened (and checked), not the path again.
+        Self::from_reader(std::io::BufReader::new(file), path)
     }
 }
 
 impl<R: Read + Seek> Npz<R> {
     /// Wraps an npz held in any seekable reader (e.g. bytes compiled into the binary); `path`
     /// is only used in error messages.
-    pub fn from_reader(reader: R, path: &Path) -> Result<Self> {
+    pub fn from_reader(mut reader: R, path: &Path) -> Result<Self> {
+        let io = |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let bytes = reader.seek(std::io::SeekFrom::End(0)).map_err(io)?;
+        reader.rewind().map_err(io)?;
         let archive = NpzArchive::new(reader).map_err(|e| Error::NotNpz {
             path: path.to_path_buf(),
             reason: e.to_string(),
@@ -69,6 +77,7 @@ impl<R: Read + Seek> Npz<R> {
         Ok(Self {
             path: path.to_path_buf(),
             archive,
+            array_limit: array_byte_limit(bytes),
         })
     }
 
@@ -108,6 +117,21 @@ impl<R: Read + Seek> Npz<R> {
             return Err(bad_array(&path, key, "structured arrays are not supported"));
         };
         let size = ts.size_field();
+        let bytes = shape
+            .iter()
+            .try_fold(size as u64, |total, &n| total.checked_mul(n as u64))
+            .filter(|&b| b <= self.array_limit);
+        if bytes.is_none() {
+            return Err(bad_array(
+                &path,
+                key,
+                format!(
+                    "shape {shape:?} of {size}-byte values is more than the {} bytes an array \
+                     of this file may have",
+                    self.array_limit
+                ),
+            ));
+        }
         // NumPy writes `np.asfortranarray` data column-major; it is reordered below.
         let fortran = file.order() == npyz::Order::Fortran;
         let io = |e: std::io::Error| Error::BadArray {

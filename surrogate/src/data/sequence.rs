@@ -14,6 +14,8 @@ use crate::geometry::{FrameBody, GeometryImage, Targets};
 /// A garment sequence read back.
 #[derive(Debug, Clone)]
 pub struct Sequence {
+    /// The file it was read from, for errors.
+    pub source: String,
     /// The recording's metadata.
     pub meta: SequenceMeta,
     /// The template.
@@ -74,6 +76,7 @@ impl Sequence {
             .map(|f| f.iter().map(|p| p.map(f64::from)).collect())
             .collect();
         Ok(Self {
+            source: name,
             meta,
             template: r.template,
             poses,
@@ -170,8 +173,14 @@ pub fn roundtrip_floor(
     }
     if frame_means.is_empty() {
         return Err(Error::File {
-            path: sequence.meta.motion.clone(),
-            problem: "the sequence has no motion frames to score".into(),
+            path: sequence.source.clone(),
+            problem: format!(
+                "'{}' on '{}' has no motion frames to score ({} frames, all of them blend-in \
+                 and settle)",
+                sequence.meta.garment,
+                sequence.meta.motion,
+                sequence.len()
+            ),
         });
     }
     distances.sort_by(f64::total_cmp);

@@ -151,6 +151,9 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     let damaged = |file: &str, e: &dyn std::fmt::Display| {
         file_error(&dir.join(file), format!("damaged or of another model: {e}"))
     };
+    for file in ["model.bpk", "optim.bpk", "ema.bpk"] {
+        super::export::check_weights_file(&dir.join(file))?;
+    }
     let model = Dit::new(&config.model, device)
         .try_load_file(dir.join("model.bpk"))
         .map_err(|e| damaged("model.bpk", &e))?;

@@ -45,9 +45,10 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     let config = RunConfig::load_saved(&config_path)?;
     config.validate().map_err(|e| file_error(&config_path, e))?;
     let weights = run.join("model.safetensors");
-    if !weights.is_file() {
+    if !weights.exists() {
         return Err(file_error(&weights, "missing (train the model first)"));
     }
+    check_weights_file(&weights)?;
     let mut model = Dit::new(&config.model, device);
     let mut store = SafetensorsStore::from_file(&weights).with_from_adapter(PyTorchToBurnAdapter);
     let result = model.load_from(&mut store).map_err(|e| {
@@ -185,4 +186,20 @@ fn bytes<E: std::fmt::Debug>(values: std::result::Result<Vec<f32>, E>) -> Vec<u8
         .iter()
         .flat_map(|v| v.to_le_bytes())
         .collect()
+}
+
+/// Refuses a weights file that is not a regular file (a FIFO would block the reader, a
+/// device never end) or is larger than any model, before burn reads it.
+pub(crate) fn check_weights_file(path: &Path) -> Result<()> {
+    let (_, bytes) = files::open(path)?;
+    if bytes > files::limits::TENSORS {
+        return Err(files::Error::TooLarge {
+            path: path.to_path_buf(),
+            bytes,
+            limit: files::limits::TENSORS,
+            what: "weights file",
+        }
+        .into());
+    }
+    Ok(())
 }

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Bounded fuzz smoke run of every loader (docs/RELIABILITY.md): seed corpora from the project's
+# own outputs and ../shared/testdata, then `cargo +nightly fuzz run` for SECONDS per target.
+# Needs the nightly toolchain, cargo-fuzz, python3 with numpy, and the dit-garment binary
+# ($DIT_GARMENT_BIN). Prints one line per target: executions, seconds, corpus size, result.
+# A crash leaves its input in fuzz/artifacts/<target>/ and makes this script fail.
+set -euo pipefail
+cd "$(dirname "$0")"
+seconds="${1:-30}"
+bin="${DIT_GARMENT_BIN:?set DIT_GARMENT_BIN to the dit-garment binary}"
+targets=(recording obj pattern npz spec scene_config)
+shared=../../shared/testdata
+mkdir -p "${targets[@]/#/corpus/}"
+seeds=$(mktemp -d)
+trap 'rm -rf "$seeds"' EXIT
+
+# Seeds: what the program writes and what users bring.
+"$bin" simulate --quiet --frames 3 --blend-frames 1 --settle-frames 1 \
+  --out "$seeds/seq.mcap" --obj-dir "$seeds/objs" >/dev/null
+cp "$seeds/seq.mcap" corpus/recording/seed_simulated.mcap
+cp "$(ls "$seeds"/objs/*.obj | head -1)" corpus/obj/seed_frame.obj
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\ng a\nf 1/1 2/2 3/3 4/4\n' \
+  >corpus/obj/seed_quad.obj
+"$bin" garments show tank_tight --pattern-out corpus/pattern/seed_tank_tight.json >/dev/null
+"$bin" synth --example-spec tiny >corpus/spec/seed_tiny.toml
+"$bin" simulate --print-config >corpus/scene_config/seed_default.toml
+if [ -d "$shared" ]; then
+  cp "$shared"/garmentcode/*.json corpus/pattern/ 2>/dev/null || true
+  cp "$shared"/bodies/*.obj corpus/obj/ 2>/dev/null || true
+fi
+python3 - corpus/npz <<'PY'
+import sys, numpy as np
+out = sys.argv[1]
+t = np.linspace(0, 1, 8)
+np.savez(f"{out}/seed_amass.npz", poses=np.outer(t, np.ones(156)) * 0.1,
+         trans=np.outer(t, [0.1, 0.0, 1.0]), mocap_framerate=np.array(60.0),
+         betas=np.zeros(16), gender=np.array("female"))
+np.savez_compressed(f"{out}/seed_compressed.npz", a=np.arange(12.0).reshape(3, 4),
+                    b=np.asfortranarray(np.ones((2, 3), np.float32)))
+PY
+
+status=0
+printf '%-14s %12s %8s %8s  %s\n' target executions seconds corpus result
+for t in "${targets[@]}"; do
+  log=$(mktemp)
+  if cargo +nightly fuzz run "$t" "corpus/$t" -- \
+      -max_total_time="$seconds" -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+      >"$log" 2>&1; then
+    result=ok
+  else
+    result="CRASH (see fuzz/artifacts/$t)"
+    status=1
+    tail -n 40 "$log"
+  fi
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  printf '%-14s %12s %8s %8s  %s\n' "$t" "${runs:-?}" "$seconds" "$(ls "corpus/$t" | wc -l)" "$result"
+  rm -f "$log"
+done
+exit $status
