@@ -75,7 +75,7 @@ pub fn sha256_file(path: &Path) -> Result<(String, u64)> {
 
 /// Reads a JSON Lines file of `T`, naming the file and line of a bad one.
 pub fn read_jsonl<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
-    let text = files::read_to_string(path, files::limits::TEXT, "JSON Lines file")?;
+    let text = files::read_to_string(path, files::limits::LINES, "JSON Lines file")?;
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())

@@ -20,11 +20,14 @@ use crate::cli::SceneArgs;
 use crate::inputs;
 use crate::output::write_atomic;
 
+/// The most compute threads (or synthesis jobs) a run may ask for.
+pub const MAX_THREADS: usize = 1024;
+
 /// Sets the compute threads of a `--threads` flag (all cores when absent).
 pub fn set_threads(threads: Option<usize>) -> Result<()> {
     if let Some(threads) = threads {
-        if threads == 0 {
-            bail!("--threads must be at least 1");
+        if !(1..=MAX_THREADS).contains(&threads) {
+            bail!("--threads {threads}: 1 to {MAX_THREADS}");
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -117,6 +117,44 @@ fn numbers_that_would_exhaust_memory_are_refused_by_name_before_work() {
         dir.path().to_str().unwrap(),
     ]);
     assert!(err.contains("--n 100000") && err.contains("512"), "{err}");
+    for (args, named) in [
+        (vec!["--betas", "1e300"], "betas[0]"),
+        (
+            vec!["--self-contact-distance", "10"],
+            "self_contact_distance",
+        ),
+        (
+            vec!["--substeps", "4096", "--iterations", "4096"],
+            "max_iterations",
+        ),
+    ] {
+        let mut all = vec!["simulate", "--out", out];
+        all.extend(args);
+        let err = fails(&all);
+        assert!(err.contains(named), "{named}: {err}");
+    }
+    let pictures = dir.path().join("pictures");
+    let pictures = pictures.to_str().unwrap();
+    for (flag, value) in [("--gif-size", "100000"), ("--size", "8192")] {
+        let err = fails(&["render", "no.mcap", flag, value, "--out", pictures]);
+        assert!(err.contains(flag) && err.contains(value), "{flag}: {err}");
+    }
+    let data = dir.path().join("data");
+    let data = data.to_str().unwrap();
+    for (flag, value) in [
+        ("--window", "1000000000"),
+        ("--shard-frames", "0"),
+        ("--resolution", "100000"),
+    ] {
+        let err = fails(&["dataset", "tensors", data, "--out", pictures, flag, value]);
+        assert!(err.contains(&format!("{flag} {value}")), "{flag}: {err}");
+    }
+    let err = fails(&[
+        "synth", "--spec", "no.toml", "--out", data, "--jobs", "100000",
+    ]);
+    assert!(err.contains("--jobs 100000"), "{err}");
+    let err = fails(&["predict", "--out", out, "--threads", "100000"]);
+    assert!(err.contains("--threads 100000"), "{err}");
     assert!(!Path::new(out).exists());
     assert!(temporaries(dir.path()).is_empty());
 }
@@ -139,6 +177,7 @@ fn a_spec_whose_plan_would_exhaust_memory_is_refused_before_the_folder_is_touche
         ),
         ("test = 1 ", "test = 100000000 ", "splits.test"),
         ("retries = 1", "retries = 1000000", "gates.retries"),
+        ("timeout_s = 900.0", "timeout_s = 1e300", "gates.timeout_s"),
         (
             "blend_frames = 10",
             "blend_frames = 99999999",

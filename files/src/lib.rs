@@ -68,6 +68,8 @@ pub enum Error {
 pub mod limits {
     /// A text file: scene configuration, dataset spec, manifest, run state (64 MiB).
     pub const TEXT: u64 = 64 << 20;
+    /// A JSON Lines file: a dataset plan or manifest, a training log (1 GiB).
+    pub const LINES: u64 = 1 << 30;
     /// A garment mesh (OBJ) or sewing pattern (JSON) (512 MiB).
     pub const MESH: u64 = 512 << 20;
     /// A NumPy `.npz` or `.npy` file: a body model or a motion (2 GiB).

@@ -42,7 +42,7 @@ pub fn parse_obj(text: &[u8], name: &str, stem: &str) -> Result<(Garment, Vec<u3
         ignore_lines: true,
     };
     // A byte-order mark (some Windows editors write one) is not part of the first line.
-    let text = text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(&text);
+    let text = text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(text);
     // Materials are not used: a `mtllib` line reads nothing.
     let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
     let (models, _) =

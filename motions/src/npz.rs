@@ -119,7 +119,7 @@ impl<R: Read + Seek> Npz<R> {
         let size = ts.size_field();
         let bytes = shape
             .iter()
-            .try_fold(size as u64, |total, &n| total.checked_mul(n as u64))
+            .try_fold(size, |total, &n| total.checked_mul(n as u64))
             .filter(|&b| b <= self.array_limit);
         if bytes.is_none() {
             return Err(bad_array(

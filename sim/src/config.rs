@@ -92,6 +92,11 @@ impl Default for SceneConfig {
 
 pub use motions::MAX_PREFIX_FRAMES;
 
+/// The most shape coefficients a scene may give (SMPL-X has 300).
+pub const MAX_BETAS: usize = 300;
+/// The largest shape coefficient, in standard deviations of the shape space.
+pub const MAX_BETA: f64 = 10.0;
+
 /// The most output frames a scene may ask for: the longest motion and both prefixes.
 pub const MAX_FRAMES: usize = motions::MAX_MOTION_FRAMES + 2 * MAX_PREFIX_FRAMES;
 
@@ -111,11 +116,22 @@ impl SceneConfig {
                 "must be finite and >= 0",
             ));
         }
-        if let Some(i) = self.betas.iter().position(|b| !b.is_finite()) {
+        if self.betas.len() > MAX_BETAS {
+            return Err(Error::value(
+                "betas",
+                format!("{} values", self.betas.len()),
+                &format!("must have at most {MAX_BETAS}"),
+            ));
+        }
+        if let Some(i) = self
+            .betas
+            .iter()
+            .position(|b| b.is_nan() || b.abs() > MAX_BETA)
+        {
             return Err(Error::value(
                 &format!("betas[{i}]"),
                 self.betas[i],
-                "must be finite",
+                &format!("must be within [-{MAX_BETA}, {MAX_BETA}]"),
             ));
         }
         match self.frames {

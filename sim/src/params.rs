@@ -167,6 +167,15 @@ impl SolverParams {
                 ));
             }
         }
+        // Work per frame grows as their product (and doubles per retry).
+        let work = self.substeps * self.max_iterations;
+        if work > MAX_STEP_WORK {
+            return Err(Error::value(
+                "solver.substeps x solver.max_iterations",
+                work,
+                &format!("must be at most {MAX_STEP_WORK}"),
+            ));
+        }
         if self.max_retries > MAX_RETRIES {
             return Err(Error::value(
                 "solver.max_retries",
@@ -199,6 +208,16 @@ impl SolverParams {
                 ),
             ));
         }
+        if self.self_contact_distance > MAX_SELF_CONTACT_DISTANCE_M {
+            return Err(Error::value(
+                "solver.self_contact_distance",
+                self.self_contact_distance,
+                &format!(
+                    "must be at most {MAX_SELF_CONTACT_DISTANCE_M} m (a wider gap makes every \
+                     vertex a candidate of every triangle)"
+                ),
+            ));
+        }
         if self.self_contact && self.self_contact_distance == 0.0 {
             return Err(Error::value(
                 "solver.self_contact_distance",
@@ -214,6 +233,11 @@ impl SolverParams {
 }
 
 /// Largest substep or iteration count a configuration may ask for (larger values are typos
+/// The most substeps times iterations per frame (the 4 x 16 default is 64).
+pub const MAX_STEP_WORK: usize = 65_536;
+/// The widest gap self-contact may keep between layers, m.
+pub const MAX_SELF_CONTACT_DISTANCE_M: f64 = 0.05;
+
 /// that would run for days).
 pub const MAX_STEP_COUNT: usize = 4096;
 

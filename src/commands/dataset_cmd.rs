@@ -31,6 +31,21 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             model,
             quiet,
         } => {
+            // Checked before any recording is read: each earlier frame adds 135 condition
+            // values, and a shard must stay under the size a tensor file is read at.
+            anyhow::ensure!(
+                window <= 64,
+                "--window {window}: at most 64 earlier frames (each adds 135 condition values)"
+            );
+            anyhow::ensure!(
+                (1..=16384).contains(&shard_frames),
+                "--shard-frames {shard_frames}: 1 to 16384 (a shard must stay under the 8 GiB a \
+                 tensor file is read at)"
+            );
+            anyhow::ensure!(
+                matches!(resolution, 32 | 64 | 128),
+                "--resolution {resolution}: 32, 64 or 128"
+            );
             let options = TensorOptions {
                 resolution,
                 target: TargetKind::parse(&target).context("unknown --target")?,

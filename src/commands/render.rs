@@ -27,6 +27,26 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.ssaa == 0 || args.ssaa > 4 {
         bail!("--ssaa {} is out of range (1 to 4)", args.ssaa);
     }
+    if !(16..=2048).contains(&args.gif_size) {
+        bail!("--gif-size {} is out of range (16 to 2048)", args.gif_size);
+    }
+    // Every picture is drawn supersampled: bound the samples per side.
+    if args.size.max(args.gif_size) * args.ssaa > 8192 {
+        bail!(
+            "--size {} (or --gif-size {}) with --ssaa {} is more than 8192 samples per side; \
+             lower one",
+            args.size,
+            args.gif_size,
+            args.ssaa
+        );
+    }
+    if args.frames.len() * views.len() > 64 {
+        bail!(
+            "--frames and --views ask for {} pictures; at most 64 per run (use --gif for the \
+             whole sequence)",
+            args.frames.len() * views.len()
+        );
+    }
     let range = match args.range.as_slice() {
         [] => None,
         [lo, hi] if lo < hi => Some(ColourScale { min: *lo, max: *hi }),

@@ -270,6 +270,10 @@ fn write_manifest(
 }
 
 pub fn run(args: &SynthArgs) -> Result<()> {
+    let max = crate::run::MAX_THREADS;
+    if let Some(jobs) = args.jobs.filter(|&j| j > max) {
+        bail!("--jobs {jobs}: at most {max}");
+    }
     if let Some(which) = &args.example_spec {
         print!(
             "{}",

@@ -76,7 +76,7 @@ impl Pattern {
                 outline + signed_area(&p.vertices).abs() / max_area
             })
             .sum();
-        if !(estimate <= MAX_PATTERN_VERTICES as f64) {
+        if estimate.is_nan() || estimate > MAX_PATTERN_VERTICES as f64 {
             return Err(Error::Pattern(format!(
                 "meshing at {edge_length_m} m would make about {estimate:.3e} vertices, more \
                  than {MAX_PATTERN_VERTICES}: the pattern is {} m across (its units or \

@@ -113,6 +113,8 @@ pub const MAX_DRAWS: usize = 1_000;
 pub const MAX_PLANNED_SEQUENCES: usize = 1_000_000;
 /// The most retries per sequence.
 pub const MAX_RETRIES: usize = 8;
+/// The longest time limit of one attempt, s (a week).
+pub const MAX_TIMEOUT_S: f64 = 604_800.0;
 
 /// Solver settings of every sequence: the keys of a scene configuration's `[solver]` table
 /// (docs/DATASETS.md has the mapping).
@@ -310,6 +312,12 @@ impl DatasetSpec {
             if n > MAX_PLANNED_SEQUENCES {
                 return Err(format!("{key} = {n} is more than {MAX_PLANNED_SEQUENCES}"));
             }
+        }
+        if self.gates.timeout_s > MAX_TIMEOUT_S {
+            return Err(format!(
+                "gates.timeout_s = {} is more than {MAX_TIMEOUT_S} s (a week)",
+                self.gates.timeout_s
+            ));
         }
         if self.gates.retries > MAX_RETRIES {
             return Err(format!(

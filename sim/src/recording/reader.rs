@@ -136,7 +136,7 @@ impl Recording {
                 "truncated recording (no MCAP footer): the writer did not finish".into(),
             ));
         }
-        let chunks = chunk_ranges(bytes).map_err(|e| fail(e))?;
+        let chunks = chunk_ranges(bytes).map_err(&fail)?;
         let mut r = Recording::default();
         let position = std::cell::Cell::new(0);
         let source = TrackedBytes {

@@ -127,7 +127,7 @@ impl TrainingTensors {
     /// Opens a tensors folder: reads and checks the manifest and `templates.safetensors`.
     pub fn open(dir: &Path) -> Result<Self> {
         let path = dir.join("manifest.json");
-        let text = files::read_to_string(&path, files::limits::TEXT, "text file")?;
+        let text = files::read_to_string(&path, files::limits::TEXT, "tensors manifest")?;
         let manifest: TensorManifest =
             serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
         let n = &manifest.normalization;

@@ -235,7 +235,7 @@ fn stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
 /// then parsed.
 fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
     let path = dir.join("manifest.jsonl");
-    let text = files::read_to_string(&path, files::limits::TEXT, "text file")?;
+    let text = files::read_to_string(&path, files::limits::LINES, "dataset manifest")?;
     let mut records = Vec::new();
     for (i, line) in text
         .lines()

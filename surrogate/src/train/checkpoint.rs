@@ -134,7 +134,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     if !pointer_path.exists() {
         return Ok(None);
     }
-    let text = files::read_to_string(&pointer_path, files::limits::TEXT, "text file")?;
+    let text = files::read_to_string(&pointer_path, files::limits::TEXT, "checkpoint pointer")?;
     let pointer: Pointer = serde_json::from_str(&text)
         .map_err(|e| file_error(&pointer_path, format!("damaged: {e}")))?;
     let dir = run.join(&pointer.dir);
@@ -164,7 +164,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
         .try_load_file(dir.join("ema.bpk"))
         .map_err(|e| damaged("ema.bpk", &e))?;
     let state_path = dir.join("state.json");
-    let text = files::read_to_string(&state_path, files::limits::TEXT, "text file")?;
+    let text = files::read_to_string(&state_path, files::limits::TEXT, "run state")?;
     let state: RunState = serde_json::from_str(&text)
         .map_err(|e| file_error(&state_path, format!("damaged: {e}")))?;
     if state.step != pointer.step {

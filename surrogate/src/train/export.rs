@@ -92,7 +92,7 @@ impl TrainedModel {
     pub fn load(run: &Path, device: &Device) -> Result<Self> {
         let (config, model) = load_run(run, device)?;
         let path = run.join(TENSORS_MANIFEST);
-        let text = files::read_to_string(&path, files::limits::TEXT, "text file")?;
+        let text = files::read_to_string(&path, files::limits::TEXT, "tensors manifest")?;
         let data: TensorManifest = serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
         let m = &config.model;
         let problem = if data.resolution != m.resolution {

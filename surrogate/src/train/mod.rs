@@ -149,9 +149,11 @@ fn write_log(run: &Path, log: &[LogLine]) -> Result<()> {
 
 fn read_log(run: &Path, up_to: usize) -> Result<Vec<LogLine>> {
     let path = run.join("log.jsonl");
-    let Ok(text) = files::read_to_string(&path, files::limits::TEXT, "log") else {
+    if !path.exists() {
         return Ok(Vec::new());
-    };
+    }
+    // An unreadable log is an error: resuming without it would erase the run's history.
+    let text = files::read_to_string(&path, files::limits::LINES, "training log")?;
     let mut log = Vec::new();
     for (i, line) in text
         .lines()
