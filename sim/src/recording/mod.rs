@@ -5,6 +5,7 @@
 //! metadata, so the Python `mcap` package and Foxglove read them without our code.
 
 mod foxglove;
+mod mcap_read;
 mod reader;
 mod writer;
 

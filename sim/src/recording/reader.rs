@@ -3,94 +3,10 @@
 
 use std::path::Path;
 
+use super::mcap_read::messages;
 use super::*;
 use crate::error::{Error, Result};
 use crate::scene::FrameStats;
-
-/// The largest record or decompressed chunk a recording may hold: our writer's chunks are
-/// 4 MiB, so anything past this (or past a few times the file's size) is a damaged length
-/// field, refused before the reader reserves memory for it.
-const RECORD_LIMIT_BYTES: usize = 64 << 20;
-
-/// MCAP opcode of a chunk record.
-const CHUNK_OPCODE: u8 = 0x06;
-
-/// Reading options that make a damaged file an error, never a panic or an abort: every
-/// length is bounded and every chunk's CRC is checked before its records are parsed.
-fn reader_options(file_len: usize) -> mcap::sans_io::LinearReaderOptions {
-    mcap::sans_io::LinearReaderOptions::default()
-        .with_record_length_limit(RECORD_LIMIT_BYTES.max(file_len.saturating_mul(4)))
-        .with_prevalidate_chunk_crcs(true)
-        .with_validate_data_section_crc(true)
-}
-
-/// The byte ranges of the file's top-level chunk records, for naming the chunk a damage is
-/// in. Walks the record framing (opcode, u64 length) only, checking each length against what
-/// is left of the file.
-fn chunk_ranges(bytes: &[u8]) -> std::result::Result<Vec<std::ops::Range<u64>>, String> {
-    let end = bytes.len() - MAGIC.len();
-    let mut at = MAGIC.len();
-    let mut chunks = Vec::new();
-    while at < end {
-        if end - at < 9 {
-            return Err(format!(
-                "damaged recording: a record header at byte {at} is cut off"
-            ));
-        }
-        let opcode = bytes[at];
-        let mut len = [0u8; 8];
-        len.copy_from_slice(&bytes[at + 1..at + 9]);
-        let len = u64::from_le_bytes(len);
-        let next = (at as u64 + 9)
-            .checked_add(len)
-            .filter(|&n| n <= end as u64);
-        let Some(next) = next else {
-            return Err(format!(
-                "damaged recording: the record at byte {at} claims {len} bytes, past the end of the file"
-            ));
-        };
-        if opcode == CHUNK_OPCODE {
-            chunks.push(at as u64..next);
-        }
-        at = next as usize;
-    }
-    Ok(chunks)
-}
-
-/// An MCAP error at reader position `at`, naming the chunk it falls in.
-fn damage_message(error: &mcap::McapError, at: u64, chunks: &[std::ops::Range<u64>]) -> String {
-    let what = match error {
-        mcap::McapError::BadChunkCrc { saved, calculated } => {
-            format!("its CRC does not match (saved {saved:#010x}, computed {calculated:#010x})")
-        }
-        other => other.to_string(),
-    };
-    match chunks.iter().position(|c| c.start < at && at <= c.end) {
-        Some(k) => format!(
-            "damaged recording: chunk {k} of {} (bytes {}..{}): {what}",
-            chunks.len(),
-            chunks[k].start,
-            chunks[k].end
-        ),
-        None => format!("damaged recording near byte {at}: {what}"),
-    }
-}
-
-/// The file's bytes as a reader that tells how far it has been read.
-struct TrackedBytes<'a> {
-    bytes: &'a [u8],
-    position: &'a std::cell::Cell<u64>,
-}
-
-impl std::io::Read for TrackedBytes<'_> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let at = self.position.get() as usize;
-        let n = buf.len().min(self.bytes.len() - at);
-        buf[..n].copy_from_slice(&self.bytes[at..at + n]);
-        self.position.set((at + n) as u64);
-        Ok(n)
-    }
-}
 
 /// A recording read back.
 #[derive(Debug, Clone, Default)]
@@ -111,7 +27,7 @@ pub struct Recording {
     pub stats: Vec<FrameStats>,
 }
 
-const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+pub(super) const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 impl Recording {
     /// Reads a whole recording; truncated or foreign files get an error naming the file.
@@ -136,18 +52,10 @@ impl Recording {
                 "truncated recording (no MCAP footer): the writer did not finish".into(),
             ));
         }
-        let chunks = chunk_ranges(bytes).map_err(&fail)?;
         let mut r = Recording::default();
-        let position = std::cell::Cell::new(0);
-        let source = TrackedBytes {
-            bytes,
-            position: &position,
-        };
-        let stream = mcap::io::MessageReader::new_with_options(source, reader_options(bytes.len()));
-        for message in stream {
-            let m = message.map_err(|e| fail(damage_message(&e, position.get(), &chunks)))?;
-            let data = &m.data;
-            let topic = m.channel.topic.as_str();
+        for (topic, data) in messages(bytes).map_err(&fail)? {
+            let data = &data;
+            let topic = topic.as_str();
             let json = |what: &str| fail(format!("bad {what} message on {topic}"));
             match topic {
                 META_TOPIC => {
@@ -222,6 +130,7 @@ fn index_triples(data: &[u8]) -> Vec<[u32; 3]> {
 mod tests {
     use super::*;
     use crate::params::{Material, SolverParams};
+    use crate::recording::mcap_read::chunk_ranges;
     use crate::recording::{Channels, FrameRecord, SequenceWriter};
     use rand::{Rng, SeedableRng};
 
@@ -323,6 +232,46 @@ mod tests {
         bytes[9..17].copy_from_slice(&0x7000_0000_0000_0000u64.to_le_bytes());
         let message = read(&bytes).unwrap_err().to_string();
         assert!(message.contains("past the end of the file"), "{message}");
+    }
+
+    /// Found by the `recording` fuzz target: a metadata record whose map claims 4 GB. mcap's
+    /// record parser reserved it; the reader must not parse such records at all.
+    #[test]
+    fn a_metadata_record_claiming_gigabytes_is_refused_without_reserving_them() {
+        let bytes: &[u8] = &[
+            137, 77, 67, 65, 80, 48, 13, 10, 12, 66, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 254, 255,
+            255, 255, 255, 255, 255, 255, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+            0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+            59, 77, 64, 65, 0, 230, 137, 77, 67, 65, 80, 48, 13, 10,
+        ];
+        let message = read(bytes).unwrap_err().to_string();
+        assert!(message.contains("damaged.mcap"), "{message}");
+    }
+
+    /// Found by the `recording` fuzz target: an uncompressed chunk without a CRC whose inner
+    /// record runs past the chunk (mcap's reader then subtracts past zero).
+    #[test]
+    fn a_chunk_whose_record_runs_past_it_is_refused() {
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        let mut chunk = vec![0u8; 24];
+        chunk.extend_from_slice(&0x1234u32.to_le_bytes()); // CRC
+        chunk.extend_from_slice(&0u32.to_le_bytes()); // no compression
+        chunk.extend_from_slice(&20u64.to_le_bytes()); // records length
+        chunk.push(0x05);
+        chunk.extend_from_slice(&200u64.to_le_bytes()); // a message longer than the chunk
+        chunk.extend_from_slice(&[0; 11]);
+        bytes.push(0x06);
+        bytes.extend_from_slice(&(chunk.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&chunk);
+        bytes.extend_from_slice(MAGIC);
+        let message = read(&bytes).unwrap_err().to_string();
+        assert!(message.contains("runs past the chunk"), "{message}");
+        // The same chunk without a CRC (the input the fuzzer found) is refused for that.
+        let crc_at = MAGIC.len() + 9 + 9 + 24;
+        bytes[crc_at..crc_at + 4].fill(0);
+        let message = read(&bytes).unwrap_err().to_string();
+        assert!(message.contains("no CRC"), "{message}");
     }
 
     /// Random damage of 1-8 bytes, 200 seeded cases: each is read without a panic, and a
