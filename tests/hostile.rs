@@ -44,6 +44,24 @@ fn chunks(bytes: &[u8]) -> Vec<std::ops::Range<usize>> {
     out
 }
 
+/// `garments check OBJ` (refused: its report) and `simulate --garment OBJ` (refused: its
+/// error), with nothing written.
+fn check_and_simulate(obj: &Path) -> (String, String) {
+    let checked = common::run_with(&["garments", "check", obj.to_str().unwrap()], &[]);
+    let report = String::from_utf8_lossy(&checked.stdout).to_string();
+    assert_eq!(checked.status.code(), Some(1), "{report}");
+    let out = obj.with_extension("mcap");
+    let err = fails(&[
+        "simulate",
+        "--garment",
+        obj.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!out.exists());
+    (report, err)
+}
+
 /// Every file in `dir` whose name ends with `.tmp`.
 fn temporaries(dir: &Path) -> Vec<String> {
     std::fs::read_dir(dir)
@@ -287,21 +305,11 @@ fn a_fan_of_a_huge_polygon_is_refused_and_a_byte_order_mark_is_read() {
     text += "\n";
     let fan = dir.path().join("fan.obj");
     std::fs::write(&fan, text).unwrap();
-    let checked = common::run_with(&["garments", "check", fan.to_str().unwrap()], &[]);
-    let report = String::from_utf8_lossy(&checked.stdout);
-    assert_eq!(checked.status.code(), Some(1), "{report}");
+    let (report, err) = check_and_simulate(&fan);
     assert!(
         report.contains("vertices in too many triangles: 1"),
         "{report}"
     );
-    let out = dir.path().join("fan.mcap");
-    let err = fails(&[
-        "simulate",
-        "--garment",
-        fan.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
     assert!(err.contains("too many triangles"), "{err}");
     // A byte-order mark before the first line is not part of it.
     let bom = dir.path().join("bom.obj");
@@ -410,20 +418,11 @@ fn mesh_errors_name_vertices_as_the_file_numbers_them() {
     text += "g b\nf 5/5 6/6 10/10\nf 6/6 11/11 10/10\ng a\nf 1/1 2/2 5/5\nf 2/2 6/6 5/5\n";
     let obj = dir.path().join("nan.obj");
     std::fs::write(&obj, text).unwrap();
-    let checked = common::run_with(&["garments", "check", obj.to_str().unwrap()], &[]);
-    let report = String::from_utf8_lossy(&checked.stdout);
+    let (report, err) = check_and_simulate(&obj);
     assert!(
         report.contains("non-finite positions: 1 (e.g. OBJ vertex 11)"),
         "{report}"
     );
-    let out = dir.path().join("nan.mcap");
-    let err = fails(&[
-        "simulate",
-        "--garment",
-        obj.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
     assert!(
         err.contains("OBJ vertex 11") && err.contains("nan.obj"),
         "{err}"

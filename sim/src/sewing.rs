@@ -250,15 +250,28 @@ pub fn fit_to_body(positions: &[[f64; 3]], body: &[[f64; 3]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// Sews `sewn` (positions in GarmentCode's frame, metres) onto the default shape of `model` in
-/// its canonical pose and drapes it: the template and the report. Gates that fail are
-/// reported, not raised: the caller decides.
-pub fn sew(
+/// Checks that `sewn` can be simulated at all, before anything is draped: the cloth mesh
+/// builds and its system factorizes (what `garments check` runs on a pattern, so that a
+/// pattern it passes does not fail `garments make` in the solver).
+pub fn preflight(model: &BodyModel, sewn: &SewnMesh, options: &SewingOptions) -> Result<()> {
+    first_solver(model, sewn, options).map(|_| ())
+}
+
+/// The garment placed on the canonical body and the solver that closes its seams.
+struct FirstSolver {
+    body: motions::PosedBody,
+    rest: Vec<Vec3>,
+    mesh: ClothMesh,
+    solver: Solver,
+    params: SolverParams,
+}
+
+/// Places the garment on the canonical body and factorizes the system that closes its seams.
+fn first_solver(
     model: &BodyModel,
     sewn: &SewnMesh,
     options: &SewingOptions,
-) -> Result<(Garment, SewingReport)> {
-    let started = Instant::now();
+) -> Result<FirstSolver> {
     let body = canonical_body(model)?;
     let placed = fit_to_body(&sewn.garment.positions, &body.vertices);
     let rest: Vec<Vec3> = placed.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
@@ -282,7 +295,32 @@ pub fn sew(
         max_iterations: 40,
         ..SolverParams::default()
     };
-    let mut solver = Solver::new(setup, params, 1.0 / FPS)?;
+    let solver = Solver::new(setup, params, 1.0 / FPS)?;
+    Ok(FirstSolver {
+        body,
+        rest,
+        mesh,
+        solver,
+        params,
+    })
+}
+
+/// Sews `sewn` (positions in GarmentCode's frame, metres) onto the default shape of `model` in
+/// its canonical pose and drapes it: the template and the report. Gates that fail are
+/// reported, not raised: the caller decides.
+pub fn sew(
+    model: &BodyModel,
+    sewn: &SewnMesh,
+    options: &SewingOptions,
+) -> Result<(Garment, SewingReport)> {
+    let started = Instant::now();
+    let FirstSolver {
+        body,
+        rest,
+        mesh,
+        mut solver,
+        params,
+    } = first_solver(model, sewn, options)?;
     let body_vertices: Vec<Vec3> = body
         .vertices
         .iter()

@@ -226,8 +226,16 @@ fn solve_columns(llt: &LltRef<'_, usize, f64>, cols: MatMut<'_, f64>, scratch: &
     llt.solve_in_place_with_conj(Conj::No, cols, Par::Seq, MemStack::new(scratch));
 }
 fn factorization(stage: &'static str, e: impl std::fmt::Debug) -> Error {
-    Error::Factorization {
-        stage,
-        message: format!("{e:?}"),
-    }
+    let message = if stage == "numeric" {
+        // The matrix is mass plus weighted Laplacians: it fails to be positive definite only
+        // through extreme weights, which slivers (near-zero angles) and out-of-range
+        // materials make.
+        format!(
+            "the cloth's system is not positive definite ({e:?}): the mesh has sliver or \
+             near-degenerate triangles, or the material is far out of range"
+        )
+    } else {
+        format!("{e:?}")
+    };
+    Error::Factorization { stage, message }
 }

@@ -223,6 +223,14 @@ fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
         let mesh = pattern
             .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)
             .map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
+        // What `garments make` needs before it drapes: the mesh builds and its system
+        // factorizes (a pattern passed here does not fail there in the solver).
+        sim::sewing::preflight(
+            &BodyModel::default_body(),
+            &mesh,
+            &sim::sewing::SewingOptions::default(),
+        )
+        .map_err(|e| anyhow::anyhow!("{shown}: cannot be sewn: {e}"))?;
         say!(
             "{shown}: a valid sewing pattern: {} panels, {} stitches, {} vertices at {} m edges",
             pattern.panels.len(),
