@@ -58,6 +58,12 @@ pub fn fails(args: &[&str]) -> String {
         Some(1),
         "{args:?} should fail with 1: {stderr}"
     );
+    // The error is one line, the last one (progress may come before it).
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert!(
+        errors.len() == 1 && stderr.trim_end().ends_with(errors[0].trim_end()),
+        "{args:?} should end with one error line: {stderr}"
+    );
     stderr
 }
 
