@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use common::{binary, fails, json, ok, python_has};
+use common::{binary, fails, json, ok, python_has, run_with};
 use serde_json::Value;
 
 /// One skirt sequence on walk (train) and one on arm_swing (test), 12 frames each.
@@ -356,4 +356,41 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
         err.contains("model.bpk") && err.contains("damaged"),
         "{err}"
     );
+
+    // Random damage (seeded: 1 to 8 bytes anywhere in each file of the checkpoint) is refused
+    // by name: the checksums written with the checkpoint catch what burnpack would load.
+    let mut state: u64 = 27;
+    let mut random = |n: usize| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 33) as usize) % n
+    };
+    for file in ["model.bpk", "optim.bpk", "ema.bpk"] {
+        let path = checkpoint.join(file);
+        let original = if file == "model.bpk" {
+            bytes.clone()
+        } else {
+            std::fs::read(&path).unwrap()
+        };
+        for case in 0..6 {
+            let mut damaged = original.clone();
+            for _ in 0..=random(8) {
+                let at = random(damaged.len());
+                damaged[at] ^= 1 + random(255) as u8;
+            }
+            std::fs::write(&path, &damaged).unwrap();
+            let out = run_with(
+                &train_args(run_s, &cfg, &["--steps", "20", "--resume"]),
+                &[],
+            );
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{file} case {case}: {stderr}");
+            assert!(
+                stderr.contains(file) && stderr.contains("damaged"),
+                "{file} case {case}: {stderr}"
+            );
+        }
+        std::fs::write(&path, &original).unwrap();
+    }
 }

@@ -52,6 +52,43 @@ pub fn optimizer(training: &TrainConfig) -> ModuleOptimizer {
         .init()
 }
 
+/// The weight files of a checkpoint.
+const CHECKPOINT_FILES: [&str; 3] = ["model.bpk", "optim.bpk", "ema.bpk"];
+/// The SHA-256 of each, written with them (`{"model.bpk": "<hex>", ...}`).
+const CHECKSUMS: &str = "checksums.json";
+
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    format!("{:x}", Sha256::digest(bytes))
+}
+
+/// Checks a checkpoint's weight files before burn reads them: regular files of a plausible
+/// size, and, where the checkpoint has `checksums.json` (every checkpoint written since it
+/// was introduced), the SHA-256 each was written with.
+fn verify_checksums(dir: &Path) -> Result<()> {
+    for file in CHECKPOINT_FILES {
+        super::export::check_weights_file(&dir.join(file))?;
+    }
+    let path = dir.join(CHECKSUMS);
+    if !path.exists() {
+        return Ok(());
+    }
+    let text = files::read_to_string(&path, files::limits::TEXT, "checkpoint checksums")?;
+    let sums: std::collections::BTreeMap<String, String> =
+        serde_json::from_str(&text).map_err(|e| file_error(&path, format!("damaged: {e}")))?;
+    for file in CHECKPOINT_FILES {
+        let file_path = dir.join(file);
+        let bytes = files::read(&file_path, files::limits::TENSORS, "weights file")?;
+        if sums.get(file) != Some(&sha256_hex(&bytes)) {
+            return Err(file_error(
+                &file_path,
+                format!("damaged: its SHA-256 is not the one in {CHECKSUMS}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Saves a checkpoint of `state.step` and removes older ones.
 pub fn save(
     run: &Path,
@@ -76,6 +113,14 @@ pub fn save(
     ema.clone()
         .save_file(tmp.join("ema.bpk"))
         .map_err(|e| fail("ema.bpk", &e))?;
+    // burnpack has no checksum: a flipped byte in a weight would load silently.
+    let mut checksums = std::collections::BTreeMap::new();
+    for file in CHECKPOINT_FILES {
+        let bytes = std::fs::read(tmp.join(file)).map_err(|e| fail(file, &e))?;
+        checksums.insert(file.to_string(), sha256_hex(&bytes));
+    }
+    let json = serde_json::to_vec_pretty(&checksums).expect("checksums serialize");
+    std::fs::write(tmp.join(CHECKSUMS), json).map_err(|e| fail(CHECKSUMS, &e))?;
     std::fs::write(tmp.join("config.toml"), config.to_toml())
         .map_err(|e| fail("config.toml", &e))?;
     let json = serde_json::to_vec_pretty(state).expect("the run state serializes");
@@ -137,6 +182,12 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     let text = files::read_to_string(&pointer_path, files::limits::TEXT, "checkpoint pointer")?;
     let pointer: Pointer = serde_json::from_str(&text)
         .map_err(|e| file_error(&pointer_path, format!("damaged: {e}")))?;
+    if !pointer.dir.starts_with("checkpoint-") || pointer.dir.contains(['/', '\\']) {
+        return Err(file_error(
+            &pointer_path,
+            format!("damaged: '{}' is not a checkpoint folder name", pointer.dir),
+        ));
+    }
     let dir = run.join(&pointer.dir);
     let saved_path = dir.join("config.toml");
     let saved = RunConfig::load_saved(&saved_path)?;
@@ -151,9 +202,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     let damaged = |file: &str, e: &dyn std::fmt::Display| {
         file_error(&dir.join(file), format!("damaged or of another model: {e}"))
     };
-    for file in ["model.bpk", "optim.bpk", "ema.bpk"] {
-        super::export::check_weights_file(&dir.join(file))?;
-    }
+    verify_checksums(&dir)?;
     let model = Dit::new(&config.model, device)
         .try_load_file(dir.join("model.bpk"))
         .map_err(|e| damaged("model.bpk", &e))?;
