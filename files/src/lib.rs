@@ -14,7 +14,7 @@ mod read;
 mod temporary;
 
 pub use destination::{Kind, check_destination, check_folder_destination};
-pub use read::{open, read, read_to_string};
+pub use read::{open, open_bounded, read, read_to_string};
 pub use temporary::{Temporary, remove_temporaries, temporary_name};
 
 use std::path::PathBuf;

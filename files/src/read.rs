@@ -30,19 +30,29 @@ pub fn open(path: &Path) -> Result<(std::fs::File, u64)> {
     Ok((file, meta.len()))
 }
 
-/// Reads a whole regular file (see [`open`]) of at most `limit` bytes; `what` names the kind
-/// of file in the error.
-pub fn read(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u8>> {
+/// [`open`], refusing a file of more than `limit` bytes (`what` names the kind of file in the
+/// error), for readers that stream it.
+pub fn open_bounded(path: &Path, limit: u64, what: &'static str) -> Result<(std::fs::File, u64)> {
     let (file, len) = open(path)?;
-    let too_large = |bytes| Error::TooLarge {
+    if len > limit {
+        return Err(too_large(path, len, limit, what));
+    }
+    Ok((file, len))
+}
+
+fn too_large(path: &Path, bytes: u64, limit: u64, what: &'static str) -> Error {
+    Error::TooLarge {
         path: path.to_path_buf(),
         bytes,
         limit,
         what,
-    };
-    if len > limit {
-        return Err(too_large(len));
     }
+}
+
+/// Reads a whole regular file (see [`open`]) of at most `limit` bytes; `what` names the kind
+/// of file in the error.
+pub fn read(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u8>> {
+    let (file, len) = open_bounded(path, limit, what)?;
     // The file may grow while it is read: never take more than the limit and one byte.
     let mut bytes = Vec::with_capacity(len as usize);
     file.take(limit + 1)
@@ -52,7 +62,7 @@ pub fn read(path: &Path, limit: u64, what: &'static str) -> Result<Vec<u8>> {
             source,
         })?;
     if bytes.len() as u64 > limit {
-        return Err(too_large(bytes.len() as u64));
+        return Err(too_large(path, bytes.len() as u64, limit, what));
     }
     Ok(bytes)
 }

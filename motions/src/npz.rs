@@ -36,16 +36,7 @@ impl Npz<std::io::BufReader<std::fs::File>> {
     /// Opens `path`, recognising a Python pickle (a common mistake with SMPL files) by its magic.
     pub fn open(path: &Path) -> Result<Self> {
         let mut head = [0u8; 2];
-        let (mut file, len) = files::open(path)?;
-        if len > files::limits::ARRAYS {
-            return Err(files::Error::TooLarge {
-                path: path.to_path_buf(),
-                bytes: len,
-                limit: files::limits::ARRAYS,
-                what: "NumPy archive",
-            }
-            .into());
-        }
+        let (mut file, _) = files::open_bounded(path, files::limits::ARRAYS, "NumPy archive")?;
         let n = file.read(&mut head).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 
 use safetensors::SafeTensors;
 use safetensors::tensor::Dtype;
-use sha2::{Digest, Sha256};
 
 use super::tensors::{Stats, TensorManifest};
 use crate::error::{Result, file_error};
@@ -56,11 +55,7 @@ impl Frames {
 /// Reads `path` and checks it against `sha256` (hex).
 fn read_checked(path: &Path, sha256: &str) -> Result<Vec<u8>> {
     let bytes = files::read(path, files::limits::TENSORS, "tensor file")?;
-    let digest: String = Sha256::digest(&bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
-    if digest != sha256 {
+    if super::sha256_hex(&bytes) != sha256 {
         return Err(file_error(
             path,
             "does not match the manifest's checksum (damaged or replaced)",

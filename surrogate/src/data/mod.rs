@@ -7,6 +7,8 @@ mod frames;
 mod sequence;
 mod tensors;
 
+pub(crate) use tensors::sha256_hex;
+
 pub use conditions::{Block, CONDITION_JOINTS, ConditionLayout};
 pub use frames::{Frames, TrainingTensors};
 pub use sequence::{Floor, Sequence, roundtrip_floor};

@@ -194,11 +194,12 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<String> {
     file.write_all(bytes)
         .map_err(|e| file_error(tmp.path(), e))?;
     tmp.persist()?;
-    Ok(hex(&Sha256::digest(bytes)))
+    Ok(sha256_hex(bytes))
 }
 
-fn hex(digest: &[u8]) -> String {
-    digest.iter().map(|b| format!("{b:02x}")).collect()
+/// The SHA-256 of `bytes` as lowercase hex (manifests, tensor shards, checkpoints).
+pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
+    format!("{:x}", Sha256::digest(bytes))
 }
 
 /// Serializes named tensors (f32 or i64 little-endian bytes with their shapes).
@@ -260,7 +261,7 @@ fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
             };
             let seq = dir.join(file);
             let bytes = files::read(&seq, files::limits::RECORDING, "recording")?;
-            if &hex(&Sha256::digest(&bytes)) != sha {
+            if &sha256_hex(&bytes) != sha {
                 return Err(file_error(
                     &seq,
                     "does not match the manifest's checksum (damaged or replaced)",

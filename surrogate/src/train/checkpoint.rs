@@ -11,6 +11,7 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::config::{RunConfig, TrainConfig};
+use crate::data::sha256_hex;
 use crate::error::{Result, file_error};
 use crate::model::Dit;
 
@@ -56,11 +57,6 @@ pub fn optimizer(training: &TrainConfig) -> ModuleOptimizer {
 const CHECKPOINT_FILES: [&str; 3] = ["model.bpk", "optim.bpk", "ema.bpk"];
 /// The SHA-256 of each, written with them (`{"model.bpk": "<hex>", ...}`).
 const CHECKSUMS: &str = "checksums.json";
-
-fn sha256_hex(bytes: &[u8]) -> String {
-    use sha2::{Digest, Sha256};
-    format!("{:x}", Sha256::digest(bytes))
-}
 
 /// Checks a checkpoint's weight files before burn reads them: regular files of a plausible
 /// size, and, where the checkpoint has `checksums.json` (every checkpoint written since it

@@ -191,15 +191,6 @@ fn bytes<E: std::fmt::Debug>(values: std::result::Result<Vec<f32>, E>) -> Vec<u8
 /// Refuses a weights file that is not a regular file (a FIFO would block the reader, a
 /// device never end) or is larger than any model, before burn reads it.
 pub(crate) fn check_weights_file(path: &Path) -> Result<()> {
-    let (_, bytes) = files::open(path)?;
-    if bytes > files::limits::TENSORS {
-        return Err(files::Error::TooLarge {
-            path: path.to_path_buf(),
-            bytes,
-            limit: files::limits::TENSORS,
-            what: "weights file",
-        }
-        .into());
-    }
+    files::open_bounded(path, files::limits::TENSORS, "weights file")?;
     Ok(())
 }
