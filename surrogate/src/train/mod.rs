@@ -328,9 +328,11 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
             progress(Event::Log(line));
             (loss_sum, norm_sum, count, interval) = (0.0, 0.0, 0, Instant::now());
             if done % t.checkpoint_every == 0 {
-                checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
+                // The log first: a run killed between the two resumes with its whole history
+                // (lines past the checkpoint are dropped on resume).
                 write_log(run, &log)?;
                 plot(run, &log)?;
+                checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
                 saved_at = done;
             }
             let out_of_time = options
@@ -341,11 +343,11 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
             }
         }
     }
+    write_log(run, &log)?;
+    plot(run, &log)?;
     if saved_at != state.step {
         checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
     }
-    write_log(run, &log)?;
-    plot(run, &log)?;
     save_weights(&ema, &run.join("model.safetensors"))?;
     let reference = reference_batch(&tensors, &train_frames, &val_frames, t, prediction);
     save_reference(&ema, &reference, &run.join("reference.safetensors"))?;
