@@ -167,6 +167,8 @@ impl Obstacle for AnimatedMesh {
             }
             a = 1.0;
         }
+        let interpolating = self.interpolate_substeps && !self.still;
+        let keyframes_changed = self.dirty;
         self.dirty = false;
         let mut moved: f64 = 0.0;
         for ((c, s), e) in self.current.iter_mut().zip(&self.start).zip(&self.end) {
@@ -175,7 +177,16 @@ impl Obstacle for AnimatedMesh {
             *c = next;
         }
         self.moved = moved;
-        self.surface.update(&self.current, &self.velocity);
+        if !interpolating {
+            self.surface.update(&self.current, &self.velocity);
+        } else {
+            // Once per frame, the BVH around the frame's whole motion; each substep's pose
+            // lies inside it.
+            if keyframes_changed {
+                self.surface.sweep(&self.start, &self.end, &self.velocity);
+            }
+            self.surface.place(&self.current);
+        }
         // The body may have moved toward every vertex by up to `moved`.
         for t in &mut self.tracks {
             t.clearance = (t.clearance - moved).max(0.0);

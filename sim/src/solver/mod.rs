@@ -62,8 +62,12 @@ const MIN_PATCH_RESPONSE: f64 = 1e-6;
 pub enum Stage {
     /// v* = v + h g, the predicted positions.
     Predict,
-    /// Obstacle update (BVH refit) and contact detection, body and cloth-cloth.
+    /// Obstacle update: the body interpolated to the step's end, its BVH refit.
+    Refit,
+    /// Body contact detection (closest-point and inside queries).
     Detect,
+    /// Cloth-cloth contact detection (broad and narrow phase).
+    SelfDetect,
     /// Air damping of the carried velocity.
     Damp,
     /// Contact counts, A x_n and the effective masses of contact nodes and pairs.
@@ -89,8 +93,12 @@ pub enum Stage {
 pub struct StageTimes {
     /// [`Stage::Predict`].
     pub predict: f64,
+    /// [`Stage::Refit`].
+    pub refit: f64,
     /// [`Stage::Detect`].
     pub detect: f64,
+    /// [`Stage::SelfDetect`].
+    pub self_detect: f64,
     /// [`Stage::Damp`].
     pub damp: f64,
     /// [`Stage::Prepare`].
@@ -116,7 +124,9 @@ impl StageTimes {
     pub fn of(&mut self, stage: Stage) -> &mut f64 {
         match stage {
             Stage::Predict => &mut self.predict,
+            Stage::Refit => &mut self.refit,
             Stage::Detect => &mut self.detect,
+            Stage::SelfDetect => &mut self.self_detect,
             Stage::Damp => &mut self.damp,
             Stage::Prepare => &mut self.prepare,
             Stage::Local => &mut self.local,

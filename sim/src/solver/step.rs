@@ -24,7 +24,11 @@ impl Solver {
         self.system_for(substeps)?;
         let h = self.frame_dt / substeps as f64;
         self.timed(Stage::Predict, |s| s.predict(state, h));
-        self.timed(Stage::Detect, |s| s.detect(state, obstacles, h, t_end));
+        self.timed(Stage::Refit, |_| {
+            obstacles.each_mut().for_each(|o| o.advance(t_end))
+        });
+        self.timed(Stage::Detect, |s| s.detect(state, obstacles, h));
+        self.timed(Stage::SelfDetect, |s| s.self_detect(state, h));
         self.timed(Stage::Damp, |s| s.damp(h));
         let mut report = self.timed(Stage::Prepare, |s| s.prepare_contacts(state, substeps));
         let limit = if self.ws.self_contacts.is_empty() {
@@ -67,7 +71,8 @@ impl Solver {
         }
     }
 
-    fn detect(&mut self, state: &ClothState, obstacles: &mut Obstacles, h: f64, t_end: f64) {
+    /// Body and prop contacts of the predicted positions, sorted by vertex.
+    fn detect(&mut self, state: &ClothState, obstacles: &mut Obstacles, h: f64) {
         let ws = &mut self.ws;
         ws.contacts.clear();
         let input = DetectionInput {
@@ -77,7 +82,6 @@ impl Solver {
             params: &self.params,
         };
         for o in obstacles.each_mut() {
-            o.advance(t_end);
             o.detect(&input, &mut ws.contacts);
         }
         let pinned = &self.pinned;
@@ -90,6 +94,12 @@ impl Solver {
         for c in &ws.contacts {
             ws.in_contact[c.vertex as usize] = true;
         }
+    }
+
+    /// Cloth-cloth pairs of the step and their nodes (marked in contact, after `detect`).
+    fn self_detect(&mut self, state: &ClothState, h: f64) {
+        let ws = &mut self.ws;
+        let pinned = &self.pinned;
         ws.self_contacts.clear();
         ws.self_nodes.clear();
         if let Some(detector) = &mut self.self_contact {
