@@ -17,6 +17,7 @@ mod contact;
 pub mod dataset;
 pub mod drape_bench;
 mod error;
+mod factor;
 pub mod metrics;
 pub mod obstacles;
 mod params;

@@ -15,29 +15,35 @@
 use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, SymbolicCholesky, factorize_symbolic_cholesky,
+};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Mat, MatMut, Par, Side};
+use faer::{Par, Side};
 
 use crate::cloth::Vec3;
 use crate::constraints::Constraints;
 use crate::error::{Error, Result};
+use crate::factor::SplitFactor;
 
 /// Symbolic analysis of one sparsity pattern (mesh + constraints + pins), shareable.
 pub type Symbolic = Arc<SymbolicCholesky<usize>>;
 
 /// The factorized global matrix and the workspace of its solves.
 pub(crate) struct GlobalSystem {
-    n: usize,
     row_ptr: Vec<usize>,
     col: Vec<u32>,
     val: Vec<f64>,
     pinned: Vec<bool>,
     symbolic: Symbolic,
     lag_bending: bool,
-    factor: Vec<f64>,
-    scratch: [MemBuffer; 2],
-    rhs: Mat<f64>,
+    factor: SplitFactor,
+    /// Right-hand sides in the factor's solve order.
+    ordered: Vec<Vec3>,
+    ordered_scalar: Vec<f64>,
+    scratch: Vec<Vec3>,
+    scratch_scalar: Vec<f64>,
 }
 
 impl GlobalSystem {
@@ -113,11 +119,16 @@ impl GlobalSystem {
         let symbolic = match symbolic {
             Some(s) if s.nrows() == n => s,
             _ => Arc::new(
+                // Simplicial: the solves are ours (`factor.rs`); measured, faer's supernodal
+                // solve of this matrix was 1.7x slower.
                 factorize_symbolic_cholesky(
                     matrix.symbolic(),
                     Side::Lower,
                     Default::default(),
-                    Default::default(),
+                    CholeskySymbolicParams {
+                        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+                        ..Default::default()
+                    },
                 )
                 .map_err(|e| factorization("symbolic", e))?,
             ),
@@ -137,12 +148,9 @@ impl GlobalSystem {
                 Default::default(),
             )
             .map_err(|e| factorization("numeric", e))?;
-        let scratch = [
-            MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
-            MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(2, Par::Seq)),
-        ];
+        let factor = SplitFactor::new(&symbolic, &factor)
+            .ok_or_else(|| factorization("symbolic", "the factor is not simplicial"))?;
         Ok(Self {
-            n,
             row_ptr,
             col,
             val,
@@ -150,8 +158,10 @@ impl GlobalSystem {
             symbolic,
             lag_bending,
             factor,
-            scratch,
-            rhs: Mat::zeros(n, 3),
+            ordered: vec![Vec3::zeros(); n],
+            ordered_scalar: vec![0.0; n],
+            scratch: Vec::new(),
+            scratch_scalar: Vec::new(),
         })
     }
 
@@ -178,24 +188,23 @@ impl GlobalSystem {
     /// Solves P u = b for one scalar right-hand side `b` (zero on pinned vertices, which stay
     /// at rest), written to `out`: a third of [`GlobalSystem::solve`]'s work.
     pub fn solve_scalar(&mut self, b: &[f64], out: &mut [f64]) {
-        for (i, &value) in b.iter().enumerate() {
-            self.rhs[(i, 0)] = if self.pinned[i] { 0.0 } else { value };
+        for (x, &i) in self.ordered_scalar.iter_mut().zip(self.factor.order()) {
+            let i = i as usize;
+            *x = if self.pinned[i] { 0.0 } else { b[i] };
         }
-        let llt = LltRef::<usize, f64>::new(&self.symbolic, &self.factor);
-        let (x, _) = self.rhs.as_mut().split_at_col_mut(1);
-        solve_columns(&llt, x, &mut self.scratch[0]);
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = self.rhs[(i, 0)];
+        self.factor
+            .solve(&mut self.ordered_scalar, &mut self.scratch_scalar);
+        for (x, &i) in self.ordered_scalar.iter().zip(self.factor.order()) {
+            out[i as usize] = *x;
         }
     }
 
     /// Solves P v = rhs with pinned velocities prescribed: `rhs` holds the right-hand side on
     /// free vertices and the prescribed velocity on pinned ones; the solution is written to
-    /// `out`. The x column is solved on one thread while y and z are solved on another; the
-    /// split is fixed, so results do not depend on the thread count.
+    /// `out` (on two threads; the same bits on any number, see `factor.rs`).
     pub fn solve(&mut self, rhs: &[Vec3], out: &mut [Vec3]) {
-        let n = self.n;
-        for i in 0..n {
+        for (x, &i) in self.ordered.iter_mut().zip(self.factor.order()) {
+            let i = i as usize;
             let mut b = rhs[i];
             if !self.pinned[i] {
                 for k in self.row_ptr[i]..self.row_ptr[i + 1] {
@@ -205,26 +214,15 @@ impl GlobalSystem {
                     }
                 }
             }
-            for c in 0..3 {
-                self.rhs[(i, c)] = b[c];
-            }
+            *x = b;
         }
-        let llt = LltRef::<usize, f64>::new(&self.symbolic, &self.factor);
-        let (x, yz) = self.rhs.as_mut().split_at_col_mut(1);
-        let [s1, s2] = &mut self.scratch;
-        rayon::join(
-            || solve_columns(&llt, x, s1),
-            || solve_columns(&llt, yz, s2),
-        );
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = Vec3::new(self.rhs[(i, 0)], self.rhs[(i, 1)], self.rhs[(i, 2)]);
+        self.factor.solve(&mut self.ordered, &mut self.scratch);
+        for (x, &i) in self.ordered.iter().zip(self.factor.order()) {
+            out[i as usize] = *x;
         }
     }
 }
 
-fn solve_columns(llt: &LltRef<'_, usize, f64>, cols: MatMut<'_, f64>, scratch: &mut MemBuffer) {
-    llt.solve_in_place_with_conj(Conj::No, cols, Par::Seq, MemStack::new(scratch));
-}
 fn factorization(stage: &'static str, e: impl std::fmt::Debug) -> Error {
     let message = if stage == "numeric" {
         // The matrix is mass plus weighted Laplacians: it fails to be positive definite only
