@@ -16,7 +16,7 @@
 //! whose obstacle is that point (see `Solver::self_contact_step`).
 
 use parry3d::bounding_volume::Aabb;
-use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhLeafUpdateStatus, BvhWorkspace};
 use rayon::prelude::*;
 
 use crate::cloth::{Vec3, closest_on_triangle, to_parry};
@@ -93,7 +93,9 @@ pub(crate) struct SelfContactDetector {
     triangles: Vec<[u32; 3]>,
     neighbour_ptr: Vec<usize>,
     neighbours: Vec<u32>,
-    boxes: Vec<Aabb>,
+    /// Each triangle's box as a leaf update of the hierarchy.
+    boxes: Vec<(Aabb, u32, f32)>,
+    statuses: Vec<BvhLeafUpdateStatus>,
     vertex_boxes: Vec<(Vec3, Vec3)>,
     bvh: Option<Bvh>,
     workspace: BvhWorkspace,
@@ -145,6 +147,7 @@ impl SelfContactDetector {
             neighbour_ptr,
             neighbours,
             boxes: Vec::with_capacity(triangles.len()),
+            statuses: Vec::new(),
             vertex_boxes: Vec::with_capacity(num_vertices),
             bvh: None,
             workspace: BvhWorkspace::default(),
@@ -194,22 +197,22 @@ impl SelfContactDetector {
         let vertex_boxes = &self.vertex_boxes;
         let widen = Vec3::repeat(band);
         self.boxes.clear();
-        self.boxes.par_extend(self.triangles.par_iter().map(|t| {
-            let [a, b, c] = t.map(|i| vertex_boxes[i as usize]);
-            let lo = a.0.inf(&b.0).inf(&c.0) - widen;
-            let hi = a.1.sup(&b.1).sup(&c.1) + widen;
-            Aabb::new(to_parry(&lo), to_parry(&hi))
-        }));
+        self.boxes
+            .par_extend(self.triangles.par_iter().enumerate().map(|(k, t)| {
+                let [a, b, c] = t.map(|i| vertex_boxes[i as usize]);
+                let lo = a.0.inf(&b.0).inf(&c.0) - widen;
+                let hi = a.1.sup(&b.1).sup(&c.1) + widen;
+                (Aabb::new(to_parry(&lo), to_parry(&hi)), k as u32, 0.0)
+            }));
         match &mut self.bvh {
             Some(bvh) if self.steps_since_build < REBUILD_STEPS => {
-                for (t, aabb) in self.boxes.iter().enumerate() {
-                    bvh.insert_or_update_partially(*aabb, t as u32, 0.0);
-                }
-                bvh.refit(&mut self.workspace);
+                bvh.insert_or_update_batch_partially_parallel(&self.boxes, &mut self.statuses);
+                bvh.refit_parallel(&mut self.workspace);
                 self.steps_since_build += 1;
             }
             _ => {
-                self.bvh = Some(Bvh::from_leaves(BvhBuildStrategy::Binned, &self.boxes));
+                let leaves: Vec<Aabb> = self.boxes.iter().map(|b| b.0).collect();
+                self.bvh = Some(Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves));
                 self.steps_since_build = 0;
             }
         }

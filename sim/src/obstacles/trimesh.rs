@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::Vector;
-use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhNode, BvhWorkspace};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhLeafUpdateStatus, BvhNode, BvhWorkspace};
 use parry3d::query::{PointQuery, PointQueryWithLocation};
 use parry3d::shape::{Triangle, TrianglePointLocation};
 use rayon::prelude::*;
@@ -44,8 +44,9 @@ pub struct MeshSurface {
     /// Triangles around each vertex (compressed rows).
     ring_ptr: Vec<u32>,
     ring_faces: Vec<u32>,
-    /// Scratch: each triangle's box at the last refit.
-    boxes: Vec<Aabb>,
+    /// Scratch: each triangle's box at the last refit, as a leaf update.
+    boxes: Vec<(Aabb, u32, f32)>,
+    statuses: Vec<BvhLeafUpdateStatus>,
 }
 
 impl MeshSurface {
@@ -91,9 +92,11 @@ impl MeshSurface {
             ring_ptr,
             ring_faces,
             boxes: Vec::new(),
+            statuses: Vec::new(),
         };
         surface.fit_boxes(None);
-        surface.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &surface.boxes);
+        let leaves: Vec<Aabb> = surface.boxes.iter().map(|b| b.0).collect();
+        surface.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves);
         Ok(surface)
     }
 
@@ -129,28 +132,29 @@ impl MeshSurface {
             .for_each(|(v, p)| *v = to_parry(p));
     }
 
-    /// Each triangle's box at the current vertices (and at `other`, when sweeping).
+    /// Each triangle's box at the current vertices (and at `other`, when sweeping), as BVH
+    /// leaf updates.
     fn fit_boxes(&mut self, other: Option<&[Vector]>) {
         let vertices = &self.vertices;
         self.boxes.clear();
-        self.boxes.par_extend(self.faces.par_iter().map(|f| {
-            let [a, b, c] = f.map(|i| vertices[i as usize]);
-            let mut lo = a.min(b).min(c);
-            let mut hi = a.max(b).max(c);
-            if let Some(other) = other {
-                let [a, b, c] = f.map(|i| other[i as usize]);
-                lo = lo.min(a.min(b).min(c));
-                hi = hi.max(a.max(b).max(c));
-            }
-            Aabb::new(lo, hi)
-        }));
+        self.boxes
+            .par_extend(self.faces.par_iter().enumerate().map(|(t, f)| {
+                let [a, b, c] = f.map(|i| vertices[i as usize]);
+                let mut lo = a.min(b).min(c);
+                let mut hi = a.max(b).max(c);
+                if let Some(other) = other {
+                    let [a, b, c] = f.map(|i| other[i as usize]);
+                    lo = lo.min(a.min(b).min(c));
+                    hi = hi.max(a.max(b).max(c));
+                }
+                (Aabb::new(lo, hi), t as u32, 0.0)
+            }));
     }
 
     fn refit(&mut self) {
-        for (t, aabb) in self.boxes.iter().enumerate() {
-            self.bvh.insert_or_update_partially(*aabb, t as u32, 0.0);
-        }
-        self.bvh.refit(&mut self.workspace);
+        self.bvh
+            .insert_or_update_batch_partially_parallel(&self.boxes, &mut self.statuses);
+        self.bvh.refit_parallel(&mut self.workspace);
     }
 
     fn triangle(&self, t: u32) -> Triangle {
