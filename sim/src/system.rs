@@ -39,6 +39,9 @@ pub(crate) struct GlobalSystem {
     symbolic: Symbolic,
     lag_bending: bool,
     factor: SplitFactor,
+    /// (solve position of a free row, entry of P coupling it to a pinned vertex), in row
+    /// order: the known velocities moved to the right-hand side.
+    pin_couplings: Vec<(u32, u32)>,
     /// Right-hand sides in the factor's solve order.
     ordered: Vec<Vec3>,
     ordered_scalar: Vec<f64>,
@@ -150,7 +153,20 @@ impl GlobalSystem {
             .map_err(|e| factorization("numeric", e))?;
         let factor = SplitFactor::new(&symbolic, &factor)
             .ok_or_else(|| factorization("symbolic", "the factor is not simplicial"))?;
+        let mut pin_couplings = Vec::new();
+        for (position, &i) in factor.order().iter().enumerate() {
+            let i = i as usize;
+            if pinned[i] {
+                continue;
+            }
+            for k in row_ptr[i]..row_ptr[i + 1] {
+                if pinned[col[k] as usize] {
+                    pin_couplings.push((position as u32, k as u32));
+                }
+            }
+        }
         Ok(Self {
+            pin_couplings,
             row_ptr,
             col,
             val,
@@ -204,17 +220,11 @@ impl GlobalSystem {
     /// `out` (on two threads; the same bits on any number, see `factor.rs`).
     pub fn solve(&mut self, rhs: &[Vec3], out: &mut [Vec3]) {
         for (x, &i) in self.ordered.iter_mut().zip(self.factor.order()) {
-            let i = i as usize;
-            let mut b = rhs[i];
-            if !self.pinned[i] {
-                for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                    let c = self.col[k] as usize;
-                    if self.pinned[c] {
-                        b -= self.val[k] * rhs[c];
-                    }
-                }
-            }
-            *x = b;
+            *x = rhs[i as usize];
+        }
+        for &(position, k) in &self.pin_couplings {
+            let c = self.col[k as usize] as usize;
+            self.ordered[position as usize] -= self.val[k as usize] * rhs[c];
         }
         self.factor.solve(&mut self.ordered, &mut self.scratch);
         for (x, &i) in self.ordered.iter().zip(self.factor.order()) {
