@@ -15,6 +15,8 @@ pub use bending::BendingRest;
 pub use seams::Seam;
 pub use springs::Spring;
 
+use rayon::prelude::*;
+
 use crate::cloth::{ClothMesh, Vec3};
 use crate::params::Material;
 
@@ -34,6 +36,10 @@ pub(crate) enum Kind {
 /// All terms of one cloth, with the weights of one material.
 #[derive(Debug, Clone, Default)]
 pub struct Constraints {
+    /// The edge springs come first, terms [0, edges): stencil (i, 1), (j, -1) at entries
+    /// 2t and 2t + 1, rest lengths in `edge_rest` (read without `kind`: see `project_all`).
+    edges: usize,
+    edge_rest: Vec<f64>,
     ptr: Vec<usize>,
     vertex: Vec<u32>,
     coeff: Vec<f64>,
@@ -150,6 +156,44 @@ impl Constraints {
         }
     }
 
+    /// q_t = p_t(A_t x) - b_t for every term, b_t = A_t x_n (`start`), or A_t x for bending
+    /// terms when `lag_bending` (they enter at the current iterate: see system.rs). The edge
+    /// springs, most of the terms, take a loop of their own over plain arrays (same bits as
+    /// the general stencil: 0 + 1 x_i - 1 x_j = x_i - x_j exactly).
+    pub(crate) fn project_all(
+        &self,
+        x: &[Vec3],
+        start: &[Vec3],
+        lag_bending: bool,
+        inputs: &ProjectionInputs,
+        q: &mut [Vec3],
+    ) {
+        const CHUNK: usize = 2048;
+        q.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                let first = chunk * CHUNK;
+                let edges = self.edges.clamp(first, first + out.len()) - first;
+                let (edge_out, rest_out) = out.split_at_mut(edges);
+                for (k, q) in edge_out.iter_mut().enumerate() {
+                    let t = first + k;
+                    let (i, j) = (self.vertex[2 * t], self.vertex[2 * t + 1]);
+                    let edge = x[i as usize] - x[j as usize];
+                    *q = stretch::project(edge, self.edge_rest[t]) - start[t];
+                }
+                for (k, q) in rest_out.iter_mut().enumerate() {
+                    let t = first + edges + k;
+                    let ax = self.apply(t, x);
+                    let base = if lag_bending && self.is_bending(t) {
+                        ax
+                    } else {
+                        start[t]
+                    };
+                    *q = self.project(t, ax, inputs) - base;
+                }
+            });
+    }
+
     /// Per vertex, the terms it appears in with coefficient times weight (for the gather that
     /// builds the right-hand side without write conflicts).
     pub(crate) fn incidence(&self, num_vertices: usize) -> (Vec<usize>, Vec<(u32, f64)>) {
@@ -180,5 +224,49 @@ impl Constraints {
                 0.5 * self.weight[t] * (ax - self.project(t, ax, inputs)).norm_squared()
             })
             .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn project_all_matches_each_terms_projection() {
+        let mesh = ClothMesh::grid(6, 0.5, 0.0).unwrap();
+        let seams = [Seam {
+            a: 0,
+            b: 35,
+            stiffness: 1e3,
+        }];
+        let c = Constraints::build(
+            &mesh,
+            &Material::default(),
+            BendingRest::Curved,
+            &seams,
+            &[],
+            &[],
+        );
+        // A crumpled state and a start with its own A x_n.
+        let x: Vec<Vec3> = mesh
+            .rest()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| p + Vec3::new(0.0, 0.01 * (i as f64 * 0.7).sin(), 0.003 * i as f64))
+            .collect();
+        let start: Vec<Vec3> = (0..c.len()).map(|t| c.apply(t, mesh.rest())).collect();
+        let inputs = ProjectionInputs {
+            seam_length_cap: 0.0,
+            attachment_targets: &[],
+        };
+        for lag in [false, true] {
+            let mut q = vec![Vec3::zeros(); c.len()];
+            c.project_all(&x, &start, lag, &inputs, &mut q);
+            for (t, q) in q.iter().enumerate() {
+                let ax = c.apply(t, &x);
+                let base = if lag && c.is_bending(t) { ax } else { start[t] };
+                assert_eq!(*q, c.project(t, ax, &inputs) - base, "term {t}");
+            }
+        }
     }
 }

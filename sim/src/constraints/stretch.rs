@@ -4,7 +4,9 @@
 use super::{Constraints, Kind};
 use crate::cloth::{ClothMesh, Vec3};
 
+/// Adds the edge springs, which must be the first terms (see `Constraints::project_all`).
 pub(super) fn add(c: &mut Constraints, mesh: &ClothMesh, stiffness: f64) {
+    assert!(c.is_empty(), "edge springs come first");
     let rest = mesh.rest();
     for &[i, j] in mesh.edges() {
         let rest_length = (rest[i as usize] - rest[j as usize]).norm();
@@ -13,7 +15,9 @@ pub(super) fn add(c: &mut Constraints, mesh: &ClothMesh, stiffness: f64) {
             stiffness,
             Kind::Stretch { rest_length },
         );
+        c.edge_rest.push(rest_length);
     }
+    c.edges = c.len();
 }
 
 /// The edge vector with its direction kept and its length set to the rest length.

@@ -192,24 +192,8 @@ impl Solver {
             seam_length_cap: self.seam_length_cap,
             attachment_targets: &self.attachment_targets,
         };
-        let constraints = &self.constraints;
-        let positions = &ws.positions;
-        let ax_start = &ws.ax_start;
-        ws.q.par_chunks_mut(2048)
-            .enumerate()
-            .for_each(|(chunk, out)| {
-                for (k, q) in out.iter_mut().enumerate() {
-                    let t = chunk * 2048 + k;
-                    let ax = constraints.apply(t, positions);
-                    // Lagged bending enters at the current iterate (see system.rs).
-                    let base = if lag_bending && constraints.is_bending(t) {
-                        ax
-                    } else {
-                        ax_start[t]
-                    };
-                    *q = constraints.project(t, ax, &inputs) - base;
-                }
-            });
+        self.constraints
+            .project_all(&ws.positions, &ws.ax_start, lag_bending, &inputs, &mut ws.q);
         let q = &ws.q;
         let (ptr, inc) = (&self.incidence_ptr, &self.incidence);
         let (masses, v_star) = (&self.masses, &ws.v_star);
