@@ -113,7 +113,7 @@ impl SplitFactor {
         {
             let (first, second) = x[..b].split_at_mut(a);
             let (border_first, border_second) = scratch.split_at_mut(rest);
-            rayon::join(
+            crate::spin_join::join(
                 || self.forward(first, 0, border_first, 0..a),
                 || self.forward(second, a, border_second, a..b),
             );
@@ -123,7 +123,7 @@ impl SplitFactor {
         self.backward_rest(rest);
         let rest = &*rest;
         let (first, second) = groups.split_at_mut(a);
-        rayon::join(
+        crate::spin_join::join(
             || self.backward(first, 0, rest, 0..a),
             || self.backward(second, a, rest, a..b),
         );
@@ -366,11 +366,16 @@ mod tests {
         );
         let solve = |threads: usize| {
             let mut x: Vec<Vec3> = factor.order().iter().map(|&i| rhs[i as usize]).collect();
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| factor.solve(&mut x, &mut Vec::new()));
+            if threads == 0 {
+                // Outside any pool: the spinning helper (see spin_join.rs).
+                factor.solve(&mut x, &mut Vec::new());
+            } else {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| factor.solve(&mut x, &mut Vec::new()));
+            }
             let mut out = vec![Vec3::zeros(); n];
             for (k, &i) in factor.order().iter().enumerate() {
                 out[i as usize] = x[k];
@@ -389,6 +394,7 @@ mod tests {
         }
         assert_eq!(one, solve(2), "the same bits on one and two threads");
         assert_eq!(one, solve(3));
+        assert_eq!(one, solve(0), "the same bits with the spinning helper");
         // The scalar solve is the x column's.
         let mut x: Vec<f64> = factor.order().iter().map(|&i| rhs[i as usize].x).collect();
         factor.solve(&mut x, &mut Vec::new());

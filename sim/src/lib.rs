@@ -28,6 +28,7 @@ mod self_contact;
 mod self_intersection;
 pub mod sewing;
 mod solver;
+mod spin_join;
 mod system;
 mod untangle;
 

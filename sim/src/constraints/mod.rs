@@ -15,8 +15,6 @@ pub use bending::BendingRest;
 pub use seams::Seam;
 pub use springs::Spring;
 
-use rayon::prelude::*;
-
 use crate::cloth::{ClothMesh, Vec3};
 use crate::params::Material;
 
@@ -168,30 +166,30 @@ impl Constraints {
         inputs: &ProjectionInputs,
         q: &mut [Vec3],
     ) {
-        const CHUNK: usize = 2048;
-        q.par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(chunk, out)| {
-                let first = chunk * CHUNK;
-                let edges = self.edges.clamp(first, first + out.len()) - first;
-                let (edge_out, rest_out) = out.split_at_mut(edges);
-                for (k, q) in edge_out.iter_mut().enumerate() {
-                    let t = first + k;
-                    let (i, j) = (self.vertex[2 * t], self.vertex[2 * t + 1]);
-                    let edge = x[i as usize] - x[j as usize];
-                    *q = stretch::project(edge, self.edge_rest[t]) - start[t];
-                }
-                for (k, q) in rest_out.iter_mut().enumerate() {
-                    let t = first + edges + k;
-                    let ax = self.apply(t, x);
-                    let base = if lag_bending && self.is_bending(t) {
-                        ax
-                    } else {
-                        start[t]
-                    };
-                    *q = self.project(t, ax, inputs) - base;
-                }
-            });
+        // Two halves of about equal stencil entries (a bending term has six or more, an
+        // edge two).
+        let entries = self.ptr.last().copied().unwrap_or(0);
+        let mid = self.ptr.partition_point(|&p| p < entries / 2).min(q.len());
+        crate::spin_join::halves(q, mid, |first, out| {
+            let edges = self.edges.clamp(first, first + out.len()) - first;
+            let (edge_out, rest_out) = out.split_at_mut(edges);
+            for (k, q) in edge_out.iter_mut().enumerate() {
+                let t = first + k;
+                let (i, j) = (self.vertex[2 * t], self.vertex[2 * t + 1]);
+                let edge = x[i as usize] - x[j as usize];
+                *q = stretch::project(edge, self.edge_rest[t]) - start[t];
+            }
+            for (k, q) in rest_out.iter_mut().enumerate() {
+                let t = first + edges + k;
+                let ax = self.apply(t, x);
+                let base = if lag_bending && self.is_bending(t) {
+                    ax
+                } else {
+                    start[t]
+                };
+                *q = self.project(t, ax, inputs) - base;
+            }
+        });
     }
 
     /// Per vertex, the terms it appears in with coefficient times weight (for the gather that

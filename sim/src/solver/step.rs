@@ -197,19 +197,18 @@ impl Solver {
         let q = &ws.q;
         let (ptr, inc) = (&self.incidence_ptr, &self.incidence);
         let (masses, v_star) = (&self.masses, &ws.v_star);
-        ws.rhs
-            .par_chunks_mut(1024)
-            .enumerate()
-            .for_each(|(chunk, out)| {
-                for (k, rhs) in out.iter_mut().enumerate() {
-                    let i = chunk * 1024 + k;
-                    let mut sum = Vec3::zeros();
-                    for &(t, cw) in &inc[ptr[i]..ptr[i + 1]] {
-                        sum += cw * q[t as usize];
-                    }
-                    *rhs = masses[i] * v_star[i] + h * sum;
+        let entries = ptr.last().copied().unwrap_or(0);
+        let mid = ptr.partition_point(|&p| p < entries / 2).min(ws.rhs.len());
+        crate::spin_join::halves(&mut ws.rhs, mid, |first, out| {
+            for (k, rhs) in out.iter_mut().enumerate() {
+                let i = first + k;
+                let mut sum = Vec3::zeros();
+                for &(t, cw) in &inc[ptr[i]..ptr[i + 1]] {
+                    sum += cw * q[t as usize];
                 }
-            });
+                *rhs = masses[i] * v_star[i] + h * sum;
+            }
+        });
     }
 
     /// The global solve P v = rhs with the factorization for `substeps` (pinned vertices keep
