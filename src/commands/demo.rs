@@ -170,8 +170,9 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
             f("E_c"),
             f("max_penetration_m") * 1e3,
         );
+        let speedup = summary["speedup"].as_f64().unwrap_or(f64::NAN);
         println!(
-            "  the surrogate ({}, {} steps, guidance {}; {} in training) ran {:.1}x faster than the engine",
+            "  the surrogate ({}, {} steps, guidance {}; {} in training) ran at {:.1}x the engine's speed",
             p["model"].as_str().unwrap_or("?"),
             p["steps"],
             p["guidance"],
@@ -180,7 +181,7 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
             } else {
                 "this garment was not"
             },
-            summary["speedup"].as_f64().unwrap_or(f64::NAN)
+            speedup
         );
     }
     let path = |k: &str| summary[k].as_str().unwrap_or("?").to_string();
