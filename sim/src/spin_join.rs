@@ -46,9 +46,11 @@ struct Helper {
     taken: AtomicBool,
 }
 
-fn helper() -> &'static Helper {
-    static HELPER: OnceLock<&'static Helper> = OnceLock::new();
-    HELPER.get_or_init(|| {
+/// The helper, started on first use; `None` if the thread cannot be started (then every
+/// join is rayon's).
+fn helper() -> Option<&'static Helper> {
+    static HELPER: OnceLock<Option<&'static Helper>> = OnceLock::new();
+    *HELPER.get_or_init(|| {
         let helper: &'static Helper = Box::leak(Box::new(Helper {
             posted: AtomicUsize::new(0),
             done: AtomicUsize::new(0),
@@ -61,8 +63,8 @@ fn helper() -> &'static Helper {
         std::thread::Builder::new()
             .name("sim-join".into())
             .spawn(move || helper.serve())
-            .expect("spawning the solver's helper thread");
-        helper
+            .ok()
+            .map(|_| helper)
     })
 }
 
@@ -137,7 +139,9 @@ pub(crate) fn join<RA: Send, RB: Send>(
     if rayon::current_thread_index().is_some() || rayon::current_num_threads() < 2 {
         return rayon::join(a, b);
     }
-    let helper = helper();
+    let Some(helper) = helper() else {
+        return rayon::join(a, b);
+    };
     if helper
         .taken
         .compare_exchange(false, true, Ordering::Acquire, Ordering::Relaxed)
