@@ -168,9 +168,17 @@ pub(crate) fn join<RA: Send, RB: Send>(
     (ra, rb.expect("the helper ran the task"))
 }
 
-/// Splits `items` at `mid` and runs `body(offset, part)` on both parts with [`join`].
-pub(crate) fn halves<T: Send>(items: &mut [T], mid: usize, body: impl Fn(usize, &mut [T]) + Sync) {
-    let (first, second) = items.split_at_mut(mid.min(items.len()));
+/// Runs `body(offset, part)` on two parts of `items` with [`join`], split where the
+/// compressed-row pointer `ptr` (one row per item) reaches half of its entries, so both parts
+/// carry about equal work.
+pub(crate) fn halves<T: Send>(
+    items: &mut [T],
+    ptr: &[usize],
+    body: impl Fn(usize, &mut [T]) + Sync,
+) {
+    let entries = ptr.last().copied().unwrap_or(0);
+    let mid = ptr.partition_point(|&p| p < entries / 2).min(items.len());
+    let (first, second) = items.split_at_mut(mid);
     join(|| body(0, first), || body(mid, second));
 }
 
@@ -207,7 +215,9 @@ mod tests {
                 s.spawn(|| {
                     for n in [0usize, 1, 7, 1000] {
                         let mut items = vec![0usize; n];
-                        halves(&mut items, n / 3, |offset, part| {
+                        // Row i has i entries: the split falls past the middle.
+                        let ptr: Vec<usize> = (0..=n).map(|i| i * (i + 1) / 2).collect();
+                        halves(&mut items, &ptr, |offset, part| {
                             for (k, x) in part.iter_mut().enumerate() {
                                 *x += offset + k + 1;
                             }

@@ -170,7 +170,6 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
             f("E_c"),
             f("max_penetration_m") * 1e3,
         );
-        let speedup = summary["speedup"].as_f64().unwrap_or(f64::NAN);
         println!(
             "  the surrogate ({}, {} steps, guidance {}; {} in training) ran at {:.1}x the engine's speed",
             p["model"].as_str().unwrap_or("?"),
@@ -181,7 +180,7 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
             } else {
                 "this garment was not"
             },
-            speedup
+            summary["speedup"].as_f64().unwrap_or(f64::NAN)
         );
     }
     let path = |k: &str| summary[k].as_str().unwrap_or("?").to_string();

@@ -166,11 +166,8 @@ impl Constraints {
         inputs: &ProjectionInputs,
         q: &mut [Vec3],
     ) {
-        // Two halves of about equal stencil entries (a bending term has six or more, an
-        // edge two).
-        let entries = self.ptr.last().copied().unwrap_or(0);
-        let mid = self.ptr.partition_point(|&p| p < entries / 2).min(q.len());
-        crate::spin_join::halves(q, mid, |first, out| {
+        // Halves of about equal stencil entries (a bending term has six or more, an edge two).
+        crate::spin_join::halves(q, &self.ptr, |first, out| {
             let edges = self.edges.clamp(first, first + out.len()) - first;
             let (edge_out, rest_out) = out.split_at_mut(edges);
             for (k, q) in edge_out.iter_mut().enumerate() {

@@ -197,9 +197,7 @@ impl Solver {
         let q = &ws.q;
         let (ptr, inc) = (&self.incidence_ptr, &self.incidence);
         let (masses, v_star) = (&self.masses, &ws.v_star);
-        let entries = ptr.last().copied().unwrap_or(0);
-        let mid = ptr.partition_point(|&p| p < entries / 2).min(ws.rhs.len());
-        crate::spin_join::halves(&mut ws.rhs, mid, |first, out| {
+        crate::spin_join::halves(&mut ws.rhs, ptr, |first, out| {
             for (k, rhs) in out.iter_mut().enumerate() {
                 let i = first + k;
                 let mut sum = Vec3::zeros();
