@@ -43,6 +43,7 @@ pub fn parse_obj(text: &[u8], name: &str, stem: &str) -> Result<(Garment, Vec<u3
     };
     // A byte-order mark (some Windows editors write one) is not part of the first line.
     let text = text.strip_prefix(b"\xef\xbb\xbf").unwrap_or(text);
+    check_face_indices(text, &name)?;
     // Materials are not used: a `mtllib` line reads nothing.
     let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
     let (models, _) =
@@ -231,9 +232,107 @@ pub fn write_ply<W: Write>(out: &mut W, garment: &Garment) -> std::io::Result<()
     Ok(())
 }
 
+/// Refuses face indices that point at no `v`, `vt` or `vn` line, naming the line. tobj checks
+/// positions itself but computes texture and normal offsets before its bounds check, which
+/// overflows (a panic in debug builds) on an index of 0 or one far out of range.
+fn check_face_indices(text: &[u8], name: &str) -> Result<()> {
+    // tobj reads lines as UTF-8 and refuses the file otherwise; so does the first bad line here.
+    let Ok(text) = std::str::from_utf8(text) else {
+        return Ok(());
+    };
+    const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let totals = text.lines().fold([0usize; 3], |mut n, line| {
+        match line.split_whitespace().next() {
+            Some("v") => n[0] += 1,
+            Some("vt") => n[1] += 1,
+            Some("vn") => n[2] += 1,
+            _ => {}
+        }
+        n
+    });
+    let mut seen = [0usize; 3];
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => seen[0] += 1,
+            Some("vt") => seen[1] += 1,
+            Some("vn") => seen[2] += 1,
+            Some("f") => {
+                for corner in words {
+                    for (kind, field) in corner.split('/').enumerate().take(3) {
+                        // Fields that are not integers are refused by tobj with its own error.
+                        let Ok(index) = field.parse::<i64>() else {
+                            continue;
+                        };
+                        // Negative indices count back from the elements read so far.
+                        let fine = if index < 0 {
+                            index.unsigned_abs() as usize <= seen[kind]
+                        } else {
+                            index >= 1 && index as u64 <= totals[kind] as u64
+                        };
+                        if !fine {
+                            return Err(Error::Format {
+                                path: name.to_string(),
+                                message: format!(
+                                    "line {}: face index {index} names no {} ({} in the file, {} \
+                                     before this line)",
+                                    number + 1,
+                                    KINDS[kind],
+                                    totals[kind],
+                                    seen[kind]
+                                ),
+                            });
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn face_indices_naming_nothing_are_refused_by_line() {
+        let square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+        let fine = format!("{square}f 1/1 2/2 3/3 4/-1\n");
+        parse_obj(fine.as_bytes(), "ok.obj", "ok").unwrap();
+        // The fuzzer's find: a relative texture index before any `vt` line (tobj overflowed).
+        let cases = [
+            (
+                "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1/1 2/-2 3/3\nvt 0 0\n",
+                "line 4",
+                "-2",
+            ),
+            (&*format!("{square}f 1/0 2/2 3/3\n"), "line 9", "index 0"),
+            (
+                &*format!("{square}f 1/1 2/2 3/9\n"),
+                "line 9",
+                "texture coordinate",
+            ),
+            (&*format!("{square}f 1//1 2//1 3//1\n"), "line 9", "normal"),
+            (&*format!("{square}f 1 2 -5\n"), "line 9", "vertex"),
+            (
+                &*format!("{square}f 1 2 9223372036854775807\n"),
+                "line 9",
+                "vertex",
+            ),
+        ];
+        for (text, line, what) in cases {
+            let message = parse_obj(text.as_bytes(), "bad.obj", "bad")
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains("bad.obj"), "{message}");
+            assert!(
+                message.contains(line) && message.contains(what),
+                "{message}"
+            );
+        }
+    }
 
     #[test]
     fn round_trip_keeps_panels_and_welds_seams() {
