@@ -236,57 +236,58 @@ pub fn write_ply<W: Write>(out: &mut W, garment: &Garment) -> std::io::Result<()
 /// positions itself but computes texture and normal offsets before its bounds check, which
 /// overflows (a panic in debug builds) on an index of 0 or one far out of range.
 fn check_face_indices(text: &[u8], name: &str) -> Result<()> {
-    // tobj reads lines as UTF-8 and refuses the file otherwise; so does the first bad line here.
+    // Text that is not UTF-8 is left to tobj, which refuses it.
     let Ok(text) = std::str::from_utf8(text) else {
         return Ok(());
     };
     const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
-    let totals = text.lines().fold([0usize; 3], |mut n, line| {
-        match line.split_whitespace().next() {
-            Some("v") => n[0] += 1,
-            Some("vt") => n[1] += 1,
-            Some("vn") => n[2] += 1,
-            _ => {}
+    // Which element a line's first word declares: 0 `v`, 1 `vt`, 2 `vn`.
+    let kind_of = |word: Option<&str>| match word {
+        Some("v") => Some(0),
+        Some("vt") => Some(1),
+        Some("vn") => Some(2),
+        _ => None,
+    };
+    let mut totals = [0usize; 3];
+    for line in text.lines() {
+        if let Some(kind) = kind_of(line.split_whitespace().next()) {
+            totals[kind] += 1;
         }
-        n
-    });
+    }
     let mut seen = [0usize; 3];
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => seen[0] += 1,
-            Some("vt") => seen[1] += 1,
-            Some("vn") => seen[2] += 1,
-            Some("f") => {
-                for corner in words {
-                    for (kind, field) in corner.split('/').enumerate().take(3) {
-                        // Fields that are not integers are refused by tobj with its own error.
-                        let Ok(index) = field.parse::<i64>() else {
-                            continue;
-                        };
-                        // Negative indices count back from the elements read so far.
-                        let fine = if index < 0 {
-                            index.unsigned_abs() as usize <= seen[kind]
-                        } else {
-                            index >= 1 && index as u64 <= totals[kind] as u64
-                        };
-                        if !fine {
-                            return Err(Error::Format {
-                                path: name.to_string(),
-                                message: format!(
-                                    "line {}: face index {index} names no {} ({} in the file, {} \
+        let first = words.next();
+        if let Some(kind) = kind_of(first) {
+            seen[kind] += 1;
+        } else if first == Some("f") {
+            for corner in words {
+                for (kind, field) in corner.split('/').enumerate().take(3) {
+                    // Fields that are not integers are refused by tobj with its own error.
+                    let Ok(index) = field.parse::<i64>() else {
+                        continue;
+                    };
+                    // Negative indices count back from the elements read so far.
+                    let fine = if index < 0 {
+                        index.unsigned_abs() as usize <= seen[kind]
+                    } else {
+                        index >= 1 && index as u64 <= totals[kind] as u64
+                    };
+                    if !fine {
+                        return Err(Error::Format {
+                            path: name.to_string(),
+                            message: format!(
+                                "line {}: face index {index} names no {} ({} in the file, {} \
                                      before this line)",
-                                    number + 1,
-                                    KINDS[kind],
-                                    totals[kind],
-                                    seen[kind]
-                                ),
-                            });
-                        }
+                                number + 1,
+                                KINDS[kind],
+                                totals[kind],
+                                seen[kind]
+                            ),
+                        });
                     }
                 }
             }
-            _ => {}
         }
     }
     Ok(())
