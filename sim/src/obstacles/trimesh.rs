@@ -15,7 +15,7 @@ use std::collections::HashMap;
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::Vector;
 use parry3d::partitioning::{Bvh, BvhBuildStrategy, BvhLeafUpdateStatus, BvhNode, BvhWorkspace};
-use parry3d::query::{PointQuery, PointQueryWithLocation};
+use parry3d::query::{PointQuery, PointQueryWithLocation, Ray};
 use parry3d::shape::{Triangle, TrianglePointLocation};
 use rayon::prelude::*;
 
@@ -215,7 +215,13 @@ impl MeshSurface {
         let closest = from_parry(projection.point);
         let offset = p - closest;
         let length = offset.norm();
-        let inside = (point - projection.point).dot(self.pseudo_normal(triangle, &location)) <= 0.0;
+        // The pseudo-normal decides the side only where the mesh is a clean closed surface.
+        // A posed body folds where skinning collapses it (an armpit, a hip fold): there a
+        // triangle may face inward, and points outside the body in front of it read as
+        // inside, 27 mm deep on a larger body's arm swing, which the contact solve then
+        // pushes through the fold. Such an answer is confirmed by the winding number.
+        let inside = (point - projection.point).dot(self.pseudo_normal(triangle, &location)) <= 0.0
+            && self.winding_number(p) > 0;
         let sign = if inside { -1.0 } else { 1.0 };
         let face = self.faces[triangle as usize];
         let normal = if length > 1e-7 {
@@ -236,12 +242,114 @@ impl MeshSurface {
         })
     }
 
+    /// The winding number of the mesh around `p`: 1 inside a closed outward mesh, 0 outside,
+    /// 2 where two parts of a self-intersecting one overlap, whatever inward-facing folds lie
+    /// between. It is the signed count of a ray's crossings (+1 leaving through a face, -1
+    /// entering). The ray leaves by the nearest side of the mesh's bounding box (a short ray
+    /// meets few BVH nodes: a body is thinnest front to back). A ray passing within a hair of
+    /// an edge or a vertex could count a crossing twice or not at all, so such a ray is
+    /// replaced by the next nearest side's (the majority of the first three decides if all
+    /// graze).
+    pub fn winding_number(&self, p: Vec3) -> i32 {
+        let aabb = self.bvh.root_aabb();
+        let (lo, hi) = (from_parry(aabb.mins), from_parry(aabb.maxs));
+        // Distance to each side (+x, -x, +y, ...), nearest first.
+        let mut sides: [(f64, usize); 6] = std::array::from_fn(|k| {
+            let gap = if k % 2 == 0 { hi - p } else { p - lo };
+            (gap[k / 2], k)
+        });
+        sides.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut counts = [0; 3];
+        for (n, &(_, k)) in sides.iter().enumerate() {
+            let direction = Vec3::from(RAY_DIRECTIONS[k]);
+            match self.crossings(p, direction) {
+                Some(count) => return count,
+                None if n < 3 => counts[n] = self.crossings_counted(p, direction),
+                None => {}
+            }
+        }
+        match counts {
+            [a, b, _] if a == b => a,
+            [a, _, c] if a == c => a,
+            [_, b, _] => b,
+        }
+    }
+
+    /// The signed crossings of the ray, `None` if it grazes an edge or a vertex.
+    fn crossings(&self, origin: Vec3, direction: Vec3) -> Option<i32> {
+        let ray = Ray::new(to_parry(&origin), to_parry(&direction));
+        self.bvh
+            .leaves(|node: &BvhNode| node.cast_ray(&ray, f32::MAX) < f32::MAX)
+            .map(|t| {
+                let [a, b, c] =
+                    self.faces[t as usize].map(|i| from_parry(self.vertices[i as usize]));
+                ray_crossing(origin, direction, a, b, c)
+            })
+            .try_fold(0, |sum, crossing| crossing.map(|c| sum + c))
+    }
+
+    /// The signed crossings of the ray, grazing ones counted as they fall.
+    fn crossings_counted(&self, origin: Vec3, direction: Vec3) -> i32 {
+        let ray = Ray::new(to_parry(&origin), to_parry(&direction));
+        self.bvh
+            .leaves(|node: &BvhNode| node.cast_ray(&ray, f32::MAX) < f32::MAX)
+            .map(|t| {
+                let [a, b, c] =
+                    self.faces[t as usize].map(|i| from_parry(self.vertices[i as usize]));
+                ray_crossing(origin, direction, a, b, c).unwrap_or(0)
+            })
+            .sum()
+    }
+
     /// Whether `p` is within `margin` of the mesh's bounding box.
     pub fn near_bounds(&self, p: Vec3, margin: f64) -> bool {
         let aabb = self.bvh.root_aabb();
         let (lo, hi) = (from_parry(aabb.mins), from_parry(aabb.maxs));
         (0..3).all(|c| p[c] >= lo[c] - margin && p[c] <= hi[c] + margin)
     }
+}
+
+/// Directions of the winding number's rays, toward +x, -x, +y, -y, +z and -z, each tilted a
+/// little off the axis so that no ray runs along a mesh's edges or faces by construction.
+const RAY_DIRECTIONS: [[f64; 3]; 6] = [
+    [0.998_2, 0.041_3, 0.043_1],
+    [-0.997_9, 0.037_9, -0.052_3],
+    [0.047_1, 0.998_1, 0.039_2],
+    [-0.035_3, -0.998_3, 0.046_3],
+    [0.044_7, 0.036_1, 0.998_3],
+    [-0.039_7, 0.048_9, -0.998_0],
+];
+
+/// Barycentric margin (and relative determinant) under which a ray grazes a triangle's
+/// boundary or runs along its plane.
+const GRAZING: f64 = 1e-9;
+
+/// +1 where the ray from `origin` along `direction` leaves through triangle (a, b, c) (the
+/// direction along its normal), -1 where it enters, 0 where it misses (Moller-Trumbore);
+/// `None` where it grazes the triangle's edges or corners or runs along its plane.
+fn ray_crossing(origin: Vec3, direction: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<i32> {
+    let (ab, ac) = (b - a, c - a);
+    let p = direction.cross(&ac);
+    let det = ab.dot(&p);
+    let scale = ab.norm() * ac.norm() * direction.norm();
+    if det.abs() <= GRAZING * scale {
+        // Along the plane (grazing), or a triangle without area (never crossed).
+        return if scale > 0.0 { None } else { Some(0) };
+    }
+    let offset = origin - a;
+    let u = offset.dot(&p) / det;
+    let q = offset.cross(&ab);
+    let v = direction.dot(&q) / det;
+    let w = 1.0 - u - v;
+    let t = ac.dot(&q) / det;
+    if u < -GRAZING || v < -GRAZING || w < -GRAZING || t <= 0.0 {
+        return Some(0);
+    }
+    if u < GRAZING || v < GRAZING || w < GRAZING {
+        return None;
+    }
+    // det = -direction . (ab x ac): negative when the ray runs along the face's normal.
+    Some(if det < 0.0 { 1 } else { -1 })
 }
 
 /// Each triangle's edges (AB, BC, CA) as edge indices, and each edge's triangles.
@@ -401,6 +509,94 @@ pub(crate) mod tests {
                 "{p:?}: {s:?} against {exact}"
             );
         }
+    }
+
+    /// Winding number by solid angles (Van Oosterom and Strackee), independent of the rays.
+    fn solid_angle_winding(v: &[Vec3], f: &[[u32; 3]], p: Vec3) -> f64 {
+        let total: f64 = f
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| v[i as usize] - p);
+                let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+                let det = a.dot(&b.cross(&c));
+                let div = la * lb * lc + a.dot(&b) * lc + b.dot(&c) * la + c.dot(&a) * lb;
+                2.0 * det.atan2(div)
+            })
+            .sum();
+        total / (4.0 * std::f64::consts::PI)
+    }
+
+    /// The unit cube and a copy shifted by `shift`, as one self-intersecting mesh.
+    fn two_cubes(shift: Vec3) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let (mut v, mut f) = cube();
+        let n = v.len() as u32;
+        v.extend(cube().0.iter().map(|p| p + shift));
+        f.extend(cube().1.iter().map(|t| t.map(|i| i + n)));
+        (v, f)
+    }
+
+    #[test]
+    fn winding_numbers_count_overlapping_parts() {
+        let shift = Vec3::new(0.5, 0.3, 0.2);
+        for (v, f) in [cube(), two_cubes(shift)] {
+            let surface = MeshSurface::new("mesh", &v, &f).unwrap();
+            // Off the faces' planes, so that no probe lies on the surface.
+            for p in probes().iter().map(|p| p + Vec3::new(0.013, 0.007, 0.003)) {
+                let exact = solid_angle_winding(&v, &f, p).round() as i32;
+                assert_eq!(surface.winding_number(p), exact, "{p:?}");
+            }
+        }
+        let (v, f) = two_cubes(shift);
+        let surface = MeshSurface::new("mesh", &v, &f).unwrap();
+        assert_eq!(surface.winding_number(Vec3::new(0.7, 0.6, 0.5)), 2);
+        // Inside the first cube only, nearer to a face of the second that lies inside it.
+        let p = Vec3::new(0.45, 0.6, 0.5);
+        assert_eq!(surface.winding_number(p), 1);
+    }
+
+    #[test]
+    fn a_fold_facing_inward_does_not_read_as_inside() {
+        // The cube with corner 7 pushed through to the far side: the three faces around it
+        // now face inward in places, like a skinned armpit folding over itself.
+        let (mut v, f) = cube();
+        v[7] = Vec3::new(-0.4, 0.45, 0.55);
+        let surface = MeshSurface::new("folded", &v, &f).unwrap();
+        let mut misread = 0;
+        let steps: Vec<f64> = (0..24).map(|k| -0.6 + 0.081 * k as f64).collect();
+        for &x in &steps {
+            for &y in &steps {
+                for &z in &steps {
+                    let p = Vec3::new(x, y, z);
+                    let exact = solid_angle_winding(&v, &f, p);
+                    if (exact - exact.round()).abs() > 1e-6 {
+                        continue; // on the surface
+                    }
+                    let point = to_parry(&p);
+                    let (t, (_, (projection, location))) = surface
+                        .bvh
+                        .find_best(
+                            f32::MAX,
+                            |node: &BvhNode, _| node.aabb().distance_to_local_point(point, true),
+                            |t, _| {
+                                let found = surface
+                                    .triangle(t)
+                                    .project_local_point_and_get_location(point, false);
+                                Some(((found.0.point - point).length(), found))
+                            },
+                        )
+                        .unwrap();
+                    let facing_in =
+                        (point - projection.point).dot(surface.pseudo_normal(t, &location)) <= 0.0;
+                    let inside = surface.query(p, f64::INFINITY).unwrap().distance < 0.0;
+                    assert_eq!(inside, exact.round() > 0.0, "{p:?}: winding {exact}");
+                    if facing_in && exact.round() <= 0.0 {
+                        misread += 1;
+                    }
+                }
+            }
+        }
+        // The pseudo-normal alone would have put these points inside.
+        assert!(misread > 0, "the fold never misleads the pseudo-normal");
     }
 
     #[test]
