@@ -263,9 +263,9 @@ impl MeshSurface {
         for (n, &(_, k)) in sides.iter().enumerate() {
             let direction = Vec3::from(RAY_DIRECTIONS[k]);
             match self.crossings(p, direction) {
-                Some(count) => return count,
-                None if n < 3 => counts[n] = self.crossings_counted(p, direction),
-                None => {}
+                (count, false) => return count,
+                (count, true) if n < 3 => counts[n] = count,
+                _ => {}
             }
         }
         match counts {
@@ -275,30 +275,20 @@ impl MeshSurface {
         }
     }
 
-    /// The signed crossings of the ray, `None` if it grazes an edge or a vertex.
-    fn crossings(&self, origin: Vec3, direction: Vec3) -> Option<i32> {
+    /// The signed crossings of the ray (grazing ones counted as they fall), and whether it
+    /// grazed an edge or a vertex.
+    fn crossings(&self, origin: Vec3, direction: Vec3) -> (i32, bool) {
         let ray = Ray::new(to_parry(&origin), to_parry(&direction));
         self.bvh
             .leaves(|node: &BvhNode| node.cast_ray(&ray, f32::MAX) < f32::MAX)
-            .map(|t| {
+            .fold((0, false), |(sum, grazed), t| {
                 let [a, b, c] =
                     self.faces[t as usize].map(|i| from_parry(self.vertices[i as usize]));
-                ray_crossing(origin, direction, a, b, c)
+                match ray_crossing(origin, direction, a, b, c) {
+                    Some(crossing) => (sum + crossing, grazed),
+                    None => (sum, true),
+                }
             })
-            .try_fold(0, |sum, crossing| crossing.map(|c| sum + c))
-    }
-
-    /// The signed crossings of the ray, grazing ones counted as they fall.
-    fn crossings_counted(&self, origin: Vec3, direction: Vec3) -> i32 {
-        let ray = Ray::new(to_parry(&origin), to_parry(&direction));
-        self.bvh
-            .leaves(|node: &BvhNode| node.cast_ray(&ray, f32::MAX) < f32::MAX)
-            .map(|t| {
-                let [a, b, c] =
-                    self.faces[t as usize].map(|i| from_parry(self.vertices[i as usize]));
-                ray_crossing(origin, direction, a, b, c).unwrap_or(0)
-            })
-            .sum()
     }
 
     /// Whether `p` is within `margin` of the mesh's bounding box.
