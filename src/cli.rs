@@ -233,6 +233,10 @@ pub struct SceneArgs {
     /// whose layers would otherwise cross). Default: 16.
     #[arg(long)]
     pub iterations: Option<usize>,
+    /// Anderson acceleration: past iterations mixed into each iterate (0 turns it off, at
+    /// most 8). Default: 0.
+    #[arg(long)]
+    pub acceleration: Option<usize>,
     /// Turns cloth-cloth contact off (it is on for garment scenes).
     #[arg(long)]
     pub no_self_contact: bool,

@@ -81,6 +81,9 @@ pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     if let Some(v) = args.iterations {
         c.solver.max_iterations = v;
     }
+    if let Some(v) = args.acceleration {
+        c.solver.acceleration = v;
+    }
     if args.no_self_contact {
         c.solver.self_contact = false;
     }

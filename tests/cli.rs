@@ -192,6 +192,7 @@ fn simulate_reports_the_checked_keys_and_rejects_bad_settings() {
         ),
         (vec!["--self-contact-distance=0"], "self_contact_distance"),
         (vec!["--self-friction=-1"], "self_friction"),
+        (vec!["--acceleration", "9"], "acceleration"),
     ] {
         let mut args = vec![
             "simulate",

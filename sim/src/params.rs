@@ -118,6 +118,12 @@ pub struct SolverParams {
     /// Coulomb friction coefficient between touching layers of cloth. Default 0.3.
     #[serde(default = "default_self_friction")]
     pub self_friction: f64,
+    /// Anderson acceleration: how many past iterations each iterate mixes in (0 = off, at
+    /// most 8; see `solver/anderson.rs`). Default 0: at the same iterations it lowers the
+    /// residual and the depth on the skirt, but fewer accelerated iterations do not yet match
+    /// 16 plain ones on every garment (docs/BENCHMARKS.md).
+    #[serde(default)]
+    pub acceleration: usize,
 }
 
 fn default_self_contact_distance() -> f64 {
@@ -144,6 +150,7 @@ impl Default for SolverParams {
             self_contact: false,
             self_contact_distance: default_self_contact_distance(),
             self_friction: default_self_friction(),
+            acceleration: 0,
         }
     }
 }
@@ -174,6 +181,13 @@ impl SolverParams {
                 "solver.substeps x solver.max_iterations",
                 work,
                 &format!("must be at most {MAX_STEP_WORK}"),
+            ));
+        }
+        if self.acceleration > MAX_ACCELERATION {
+            return Err(Error::value(
+                "solver.acceleration",
+                self.acceleration,
+                &format!("must be at most {MAX_ACCELERATION}"),
             ));
         }
         if self.max_retries > MAX_RETRIES {
@@ -240,6 +254,9 @@ pub const MAX_SELF_CONTACT_DISTANCE_M: f64 = 0.05;
 
 /// that would run for days).
 pub const MAX_STEP_COUNT: usize = 4096;
+
+/// The most past iterations Anderson acceleration mixes in.
+pub const MAX_ACCELERATION: usize = 8;
 
 /// Largest retry count (each retry doubles the substeps of the frame).
 pub const MAX_RETRIES: usize = 8;

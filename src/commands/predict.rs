@@ -65,6 +65,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         settle_frames: args.settle_frames,
         substeps: None,
         iterations: None,
+        acceleration: None,
         no_self_contact: false,
         self_contact_distance: None,
         self_friction: None,

@@ -149,6 +149,7 @@ fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
                 self_contact: spec.solver.self_contact,
                 self_contact_distance: spec.solver.self_contact_distance,
                 self_friction: spec.solver.self_friction,
+                acceleration: spec.solver.acceleration,
                 ..SolverParams::default()
             },
             record: sim::config::RecordConfig::default(),

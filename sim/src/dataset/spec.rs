@@ -133,6 +133,8 @@ pub struct SolverSpec {
     pub self_contact_distance: f64,
     /// Coulomb friction coefficient between layers.
     pub self_friction: f64,
+    /// Anderson acceleration depth (0 = off, the default).
+    pub acceleration: usize,
 }
 
 impl Default for SolverSpec {
@@ -144,6 +146,7 @@ impl Default for SolverSpec {
             self_contact: true,
             self_contact_distance: plain.self_contact_distance,
             self_friction: plain.self_friction,
+            acceleration: crate::config::garment_solver().acceleration,
         }
     }
 }

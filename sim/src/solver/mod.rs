@@ -17,6 +17,7 @@
 //! Velocity-level backward Euler: P v = M v* + h sum_t w_t A_t^T (p_t - A_t x_n) + r with
 //! P = M + h^2 sum_t w_t A_t^T A_t. Contacts only change r, never P.
 
+mod anderson;
 mod contacts;
 mod setup;
 mod step;
@@ -82,6 +83,8 @@ pub enum Stage {
     Solve,
     /// Residuals of the iteration.
     Residual,
+    /// Anderson acceleration of the iterate.
+    Accelerate,
     /// x = x + h v.
     Finish,
     /// Factorizations (a new step size).
@@ -113,6 +116,8 @@ pub struct StageTimes {
     pub solve: f64,
     /// [`Stage::Residual`].
     pub residual: f64,
+    /// [`Stage::Accelerate`].
+    pub accelerate: f64,
     /// [`Stage::Finish`].
     pub finish: f64,
     /// [`Stage::Factorize`].
@@ -134,6 +139,7 @@ impl StageTimes {
             Stage::SelfContact => &mut self.self_contact,
             Stage::Solve => &mut self.solve,
             Stage::Residual => &mut self.residual,
+            Stage::Accelerate => &mut self.accelerate,
             Stage::Finish => &mut self.finish,
             Stage::Factorize => &mut self.factorize,
         }
@@ -229,6 +235,7 @@ pub struct Solver {
     self_contact: Option<SelfContactDetector>,
     ws: Workspace,
     times: StageTimes,
+    anderson: Option<anderson::Anderson>,
 }
 
 impl Solver {

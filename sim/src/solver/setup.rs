@@ -161,6 +161,8 @@ impl Solver {
                 patch_response: vec![0.0; n],
             },
             times: StageTimes::default(),
+            anderson: (params.acceleration > 0)
+                .then(|| super::anderson::Anderson::new(params.acceleration)),
             setup,
         };
         solver.system_for(params.substeps)?;

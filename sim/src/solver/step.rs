@@ -36,7 +36,15 @@ impl Solver {
         } else {
             CROSSING_ITERATION_FACTOR * self.params.max_iterations
         };
+        if let Some(a) = &mut self.anderson {
+            a.reset();
+        }
         for iteration in 1..=limit {
+            self.timed(Stage::Accelerate, |s| {
+                if let Some(a) = &mut s.anderson {
+                    a.begin(&s.ws);
+                }
+            });
             let lag = self.systems[&substeps].lags_bending();
             self.timed(Stage::Local, |s| s.local_step(state, h, lag));
             self.timed(Stage::Contact, |s| s.contact_step(substeps));
@@ -60,6 +68,11 @@ impl Solver {
             if iteration >= self.params.max_iterations && !self.layers_would_cross(h) {
                 break;
             }
+            self.timed(Stage::Accelerate, |s| {
+                if let Some(a) = &mut s.anderson {
+                    a.accelerate(&mut s.ws);
+                }
+            });
         }
         self.timed(Stage::Finish, |s| s.finish(state, h));
         Ok(report)
