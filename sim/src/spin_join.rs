@@ -10,8 +10,12 @@
 //! Used only where both cores are the step's: outside a rayon pool (the main thread of
 //! `simulate`, `demo`, `predict`) with at least two threads. Inside a pool (synthesis runs
 //! sequences on every core) and for a second caller while the helper is taken, it is
-//! `rayon::join`. Which thread runs which half never changes a result. Written by hand: no
-//! crate offers a join that spins across the gaps of a serial loop.
+//! `rayon::join`. A caller that finishes its half before the helper has started the other
+//! takes that one back and runs it too: with another process on the second core the helper
+//! is often off it, and waiting for the scheduler made a join cost milliseconds (the skirt
+//! walk with a busy loop beside it: 2.7-4.1 frames/s before, 5.4-6.5 after; 10-13 alone).
+//! Which thread runs which half never changes a result. Written by hand: no crate offers a
+//! join that spins across the gaps of a serial loop.
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -33,10 +37,11 @@ struct Task(*mut (dyn FnMut() + Send + 'static));
 unsafe impl Send for Task {}
 
 struct Helper {
-    /// Tasks posted so far, and tasks finished (the helper runs them in order).
+    /// Tasks posted so far, and the last task the helper finished.
     posted: AtomicUsize,
     done: AtomicUsize,
-    task: Mutex<Option<Task>>,
+    /// The posted task and its number, until the helper or the poster takes it.
+    task: Mutex<Option<(usize, Task)>>,
     /// Whether the last task panicked.
     panicked: AtomicBool,
     /// Whether the helper sleeps on `wake`.
@@ -73,17 +78,18 @@ impl Helper {
         let mut seen = 0;
         loop {
             self.wait_for_task(seen);
-            seen += 1;
+            seen = self.posted.load(Ordering::SeqCst);
+            // Empty when the poster finished its own half first and took the task back.
             let task = self.task.lock().unwrap_or_else(|e| e.into_inner()).take();
-            if let Some(Task(task)) = task {
+            if let Some((job, Task(task))) = task {
                 // SAFETY: `join` keeps the closure alive and untouched until `done` says this
                 // task has finished (see there).
                 let run = AssertUnwindSafe(|| unsafe { (*task)() });
                 if catch_unwind(run).is_err() {
                     self.panicked.store(true, Ordering::SeqCst);
                 }
+                self.done.store(job, Ordering::Release);
             }
-            self.done.store(seen, Ordering::Release);
         }
     }
 
@@ -109,8 +115,9 @@ impl Helper {
     }
 
     fn post(&self, task: Task) -> usize {
-        *self.task.lock().unwrap_or_else(|e| e.into_inner()) = Some(task);
-        let job = self.posted.fetch_add(1, Ordering::SeqCst) + 1;
+        let job = self.posted.load(Ordering::SeqCst) + 1;
+        *self.task.lock().unwrap_or_else(|e| e.into_inner()) = Some((job, task));
+        self.posted.store(job, Ordering::SeqCst);
         if *self.sleeping.lock().unwrap_or_else(|e| e.into_inner()) {
             self.wake.notify_one();
         }
@@ -160,8 +167,17 @@ pub(crate) fn join<RA: Send, RB: Send>(
     let task: *mut (dyn FnMut() + Send + 'static) = unsafe { std::mem::transmute(task) };
     let job = helper.post(Task(task));
     let ra = catch_unwind(AssertUnwindSafe(a));
-    helper.wait_done(job);
-    let b_panicked = helper.panicked.swap(false, Ordering::SeqCst);
+    // A helper that has not started the task by now lost its core (another process runs
+    // there, or it slept): waiting for it would cost a scheduler slice, so take it back.
+    let unstarted = helper.task.lock().unwrap_or_else(|e| e.into_inner()).take();
+    let b_panicked = match unstarted {
+        // SAFETY: as the helper would (see above); the helper no longer sees the task.
+        Some((_, Task(task))) => catch_unwind(AssertUnwindSafe(|| unsafe { (*task)() })).is_err(),
+        None => {
+            helper.wait_done(job);
+            helper.panicked.swap(false, Ordering::SeqCst)
+        }
+    };
     helper.taken.store(false, Ordering::Release);
     let ra = ra.unwrap_or_else(|panic| resume_unwind(panic));
     assert!(!b_panicked, "a task of the parallel solve panicked");
@@ -226,6 +242,27 @@ mod tests {
                     }
                 });
             }
+        });
+    }
+
+    #[test]
+    fn joins_stay_right_while_other_threads_take_the_cores() {
+        // Busy threads on every core: the helper often loses its core, and the caller then
+        // runs both halves itself.
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            for _ in 0..4 {
+                s.spawn(|| {
+                    while !stop.load(Ordering::Relaxed) {
+                        std::hint::spin_loop();
+                    }
+                });
+            }
+            for round in 0..2000usize {
+                let (a, b) = join(|| round * 2, || round * 3);
+                assert_eq!((a, b), (round * 2, round * 3));
+            }
+            stop.store(true, Ordering::Relaxed);
         });
     }
 
