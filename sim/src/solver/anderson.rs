@@ -105,60 +105,54 @@ impl Anderson {
         }
         let (fresh, filled) = (self.has_last, self.filled);
         let mid = n / 2;
-        let sums = {
-            let (df_before, rest) = self.df.split_at_mut(slot);
-            let (df_cur, df_after) = rest.split_first_mut().expect("slot < depth");
-            let others: Vec<&[f64]> = df_before
-                .iter()
-                .map(Vec::as_slice)
-                .chain(std::iter::once(&[][..]))
-                .chain(df_after.iter().map(Vec::as_slice))
-                .take(filled)
-                .collect();
+        // f, and the new differences in their slot.
+        {
+            let (g, z) = (&self.g, &self.z);
+            let (last_f, last_g) = (&self.last_f, &self.last_g);
             let (f0, f1) = self.f.split_at_mut(mid);
-            let (d0, d1) = if fresh {
-                df_cur.split_at_mut(mid)
-            } else {
-                (&mut [][..], &mut [][..])
+            let (d0, d1) = self.df[slot].split_at_mut(if fresh { mid } else { 0 });
+            let (e0, e1) = self.dg[slot].split_at_mut(if fresh { mid } else { 0 });
+            let differences = |lo: usize, f: &mut [f64], df: &mut [f64], dg: &mut [f64]| {
+                let hi = lo + f.len();
+                for ((f, g), z) in f.iter_mut().zip(&g[lo..hi]).zip(&z[lo..hi]) {
+                    *f = g - z;
+                }
+                if fresh {
+                    for ((d, f), last) in df.iter_mut().zip(&*f).zip(&last_f[lo..hi]) {
+                        *d = f - last;
+                    }
+                    for ((d, g), last) in dg.iter_mut().zip(&g[lo..hi]).zip(&last_g[lo..hi]) {
+                        *d = g - last;
+                    }
+                }
             };
-            let (e0, e1) = if fresh {
-                self.dg[slot].split_at_mut(mid)
-            } else {
-                (&mut [][..], &mut [][..])
+            crate::spin_join::join(
+                || differences(0, f0, d0, e0),
+                || differences(mid, f1, d1, e1),
+            );
+        }
+        // Per half: the new difference against every filled slot (the Gram row), and every
+        // slot against f; the halves' sums added in a fixed order.
+        let sums = if fresh {
+            let (df, f) = (&self.df[..filled], &self.f);
+            let partial = |range: std::ops::Range<usize>| {
+                let mut sums = [0.0; 2 * MAX_DEPTH];
+                let new = &df[slot][range.clone()];
+                for (q, other) in df.iter().enumerate() {
+                    let other = &other[range.clone()];
+                    sums[q] = dot(new, other);
+                    sums[MAX_DEPTH + q] = dot(other, &f[range.clone()]);
+                }
+                sums
             };
-            let part =
-                |range: std::ops::Range<usize>, f: &mut [f64], df: &mut [f64], dg: &mut [f64]| {
-                    let ring: Vec<&[f64]> = others
-                        .iter()
-                        .map(|d| {
-                            if d.is_empty() {
-                                &[][..]
-                            } else {
-                                &d[range.clone()]
-                            }
-                        })
-                        .collect();
-                    update_half(
-                        Half {
-                            g: &self.g[range.clone()],
-                            z: &self.z[range.clone()],
-                            last_f: self.last_f.get(range.clone()).unwrap_or(&[]),
-                            last_g: self.last_g.get(range).unwrap_or(&[]),
-                        },
-                        f,
-                        df,
-                        dg,
-                        &ring,
-                        slot,
-                    )
-                };
-            let (a, b) =
-                crate::spin_join::join(|| part(0..mid, f0, d0, e0), || part(mid..n, f1, d1, e1));
+            let (a, b) = crate::spin_join::join(|| partial(0..mid), || partial(mid..n));
             let mut sums = [0.0; 2 * MAX_DEPTH];
             for (s, (x, y)) in sums.iter_mut().zip(a.iter().zip(&b)) {
                 *s = x + y;
             }
             sums
+        } else {
+            [0.0; 2 * MAX_DEPTH]
         };
         if fresh {
             for (q, &sum) in sums[..filled].iter().enumerate() {
@@ -175,25 +169,23 @@ impl Anderson {
             return false;
         }
         // Normal equations (dF^T dF + lambda I) gamma = dF^T f over the filled slots; the
-        // small ridge keeps them solvable when differences repeat (a converged contact set).
-        let mut a = [0.0; MAX_DEPTH * MAX_DEPTH];
-        let mut b = [0.0; MAX_DEPTH];
-        for p in 0..m {
-            for q in 0..m {
-                a[p * m + q] = self.gram[p * depth + q];
-            }
-            b[p] = sums[MAX_DEPTH + p];
-        }
-        let trace: f64 = (0..m).map(|p| a[p * m + p]).sum();
+        // small ridge keeps them positive definite when differences repeat (a converged
+        // contact set).
+        let gram = nalgebra::DMatrix::from_fn(m, m, |p, q| self.gram[p * depth + q]);
+        let trace = gram.trace();
         if !trace.is_finite() || trace <= 0.0 {
             return false;
         }
-        for p in 0..m {
-            a[p * m + p] += 1e-8 * trace;
-        }
-        let Some(gamma) = solve(&mut a[..m * m], &mut b[..m], m) else {
+        let ridged = gram + nalgebra::DMatrix::identity(m, m) * (1e-8 * trace);
+        let Some(cholesky) = ridged.cholesky() else {
             return false;
         };
+        let gamma = cholesky.solve(&nalgebra::DVector::from_column_slice(
+            &sums[MAX_DEPTH..MAX_DEPTH + m],
+        ));
+        if !gamma.iter().all(|g| g.is_finite()) {
+            return false;
+        }
         // z = g - dG gamma, into `z` (free until the next `begin`).
         self.z.resize(n, 0.0);
         let (z0, z1) = self.z.split_at_mut(mid);
@@ -214,46 +206,6 @@ impl Anderson {
 /// The most differences kept.
 const MAX_DEPTH: usize = crate::params::MAX_ACCELERATION;
 
-/// One half's iterate, its image, and the last iteration's f and g.
-struct Half<'a> {
-    g: &'a [f64],
-    z: &'a [f64],
-    last_f: &'a [f64],
-    last_g: &'a [f64],
-}
-
-/// f = g - z over one half; with a last iteration (`df` not empty), the new differences
-/// df = f - f_last and dg = g - g_last, and the half's partial sums: df . df_q for every
-/// filled slot q (the new slot `slot` is `df` itself) in [0, MAX_DEPTH), df_p . f after.
-fn update_half(
-    half: Half,
-    f: &mut [f64],
-    df: &mut [f64],
-    dg: &mut [f64],
-    ring: &[&[f64]],
-    slot: usize,
-) -> [f64; 2 * MAX_DEPTH] {
-    for ((f, g), z) in f.iter_mut().zip(half.g).zip(half.z) {
-        *f = g - z;
-    }
-    let mut sums = [0.0; 2 * MAX_DEPTH];
-    if df.is_empty() {
-        return sums;
-    }
-    for ((d, f), last) in df.iter_mut().zip(&*f).zip(half.last_f) {
-        *d = f - last;
-    }
-    for ((d, g), last) in dg.iter_mut().zip(half.g).zip(half.last_g) {
-        *d = g - last;
-    }
-    for (q, other) in ring.iter().enumerate() {
-        let other = if q == slot { &*df } else { other };
-        sums[q] = dot(df, other);
-        sums[MAX_DEPTH + q] = dot(other, f);
-    }
-    sums
-}
-
 /// Dot product in four interleaved partial sums (vectorizes; a fixed order, so the same bits
 /// every time).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -271,39 +223,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
         }
     }
     (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail
-}
-
-/// Gaussian elimination with partial pivoting of a small dense system; `None` if singular.
-fn solve(a: &mut [f64], b: &mut [f64], m: usize) -> Option<Vec<f64>> {
-    for col in 0..m {
-        let pivot =
-            (col..m).max_by(|&i, &j| a[i * m + col].abs().total_cmp(&a[j * m + col].abs()))?;
-        if a[pivot * m + col].abs() < 1e-300 {
-            return None;
-        }
-        if pivot != col {
-            for k in 0..m {
-                a.swap(pivot * m + k, col * m + k);
-            }
-            b.swap(pivot, col);
-        }
-        for row in col + 1..m {
-            let factor = a[row * m + col] / a[col * m + col];
-            for k in col..m {
-                a[row * m + k] -= factor * a[col * m + k];
-            }
-            b[row] -= factor * b[col];
-        }
-    }
-    let mut x = vec![0.0; m];
-    for row in (0..m).rev() {
-        let mut s = b[row];
-        for k in row + 1..m {
-            s -= a[row * m + k] * x[k];
-        }
-        x[row] = s / a[row * m + row];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Appends `v * scale` as three entries.
