@@ -154,6 +154,22 @@ impl Constraints {
         }
     }
 
+    /// A_t x of every term into `out`, on the two halves of `project_all` with its edge-spring
+    /// loop (the same bits as [`Self::apply`] term by term).
+    pub(crate) fn apply_all(&self, x: &[Vec3], out: &mut [Vec3]) {
+        crate::spin_join::halves(out, &self.ptr, |first, out| {
+            let edges = self.edges.clamp(first, first + out.len()) - first;
+            let (edge_out, rest_out) = out.split_at_mut(edges);
+            for (k, ax) in edge_out.iter_mut().enumerate() {
+                let t = first + k;
+                *ax = x[self.vertex[2 * t] as usize] - x[self.vertex[2 * t + 1] as usize];
+            }
+            for (k, ax) in rest_out.iter_mut().enumerate() {
+                *ax = self.apply(first + edges + k, x);
+            }
+        });
+    }
+
     /// q_t = p_t(A_t x) - b_t for every term, b_t = A_t x_n (`start`), or A_t x for bending
     /// terms when `lag_bending` (they enter at the current iterate: see system.rs). The edge
     /// springs, most of the terms, take a loop of their own over plain arrays (same bits as
@@ -227,7 +243,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn project_all_matches_each_terms_projection() {
+    fn project_all_and_apply_all_match_each_term() {
         let mesh = ClothMesh::grid(6, 0.5, 0.0).unwrap();
         let seams = [Seam {
             a: 0,
@@ -262,6 +278,11 @@ mod tests {
                 let base = if lag && c.is_bending(t) { ax } else { start[t] };
                 assert_eq!(*q, c.project(t, ax, &inputs) - base, "term {t}");
             }
+        }
+        let mut ax = vec![Vec3::zeros(); c.len()];
+        c.apply_all(&x, &mut ax);
+        for (t, ax) in ax.iter().enumerate() {
+            assert_eq!(*ax, c.apply(t, &x), "A x of term {t}");
         }
     }
 }

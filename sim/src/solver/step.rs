@@ -2,8 +2,6 @@
 //! the contacts, then the iteration (local projections, body contacts, cloth-cloth contacts,
 //! global solve, residual) until it converges, and finish.
 
-use rayon::prelude::*;
-
 use super::{CROSSING_ITERATION_FACTOR, Solver, Stage, StepReport};
 use crate::cloth::{ClothState, Vec3};
 use crate::constraints::ProjectionInputs;
@@ -182,19 +180,8 @@ impl Solver {
                 report.deep_contacts += 1;
             }
         }
-        {
-            let constraints = &self.constraints;
-            let x = &state.positions;
-            self.ws
-                .ax_start
-                .par_chunks_mut(2048)
-                .enumerate()
-                .for_each(|(chunk, out)| {
-                    for (k, ax) in out.iter_mut().enumerate() {
-                        *ax = constraints.apply(chunk * 2048 + k, x);
-                    }
-                });
-        }
+        self.constraints
+            .apply_all(&state.positions, &mut self.ws.ax_start);
         self.ws.v.copy_from_slice(&self.ws.v_star);
         self.effective_masses(substeps);
         self.pair_masses();
