@@ -234,7 +234,7 @@ pub struct SceneArgs {
     #[arg(long)]
     pub iterations: Option<usize>,
     /// Anderson acceleration: past iterations mixed into each iterate (0 turns it off, at
-    /// most 8). Default: 0.
+    /// most 8). Default: 0 (experimental: shallower on most sequences, unstable on some).
     #[arg(long)]
     pub acceleration: Option<usize>,
     /// Turns cloth-cloth contact off (it is on for garment scenes).
