@@ -154,26 +154,13 @@ impl Constraints {
         }
     }
 
-    /// A_t x of every term into `out`, on the two halves of `project_all` with its edge-spring
-    /// loop (the same bits as [`Self::apply`] term by term).
+    /// A_t x of every term into `out` (the same bits as [`Self::apply`] term by term).
     pub(crate) fn apply_all(&self, x: &[Vec3], out: &mut [Vec3]) {
-        crate::spin_join::halves(out, &self.ptr, |first, out| {
-            let edges = self.edges.clamp(first, first + out.len()) - first;
-            let (edge_out, rest_out) = out.split_at_mut(edges);
-            for (k, ax) in edge_out.iter_mut().enumerate() {
-                let t = first + k;
-                *ax = x[self.vertex[2 * t] as usize] - x[self.vertex[2 * t + 1] as usize];
-            }
-            for (k, ax) in rest_out.iter_mut().enumerate() {
-                *ax = self.apply(first + edges + k, x);
-            }
-        });
+        self.map_terms(x, out, |_, ax| ax, |_, ax| ax);
     }
 
     /// q_t = p_t(A_t x) - b_t for every term, b_t = A_t x_n (`start`), or A_t x for bending
-    /// terms when `lag_bending` (they enter at the current iterate: see system.rs). The edge
-    /// springs, most of the terms, take a loop of their own over plain arrays (same bits as
-    /// the general stencil: 0 + 1 x_i - 1 x_j = x_i - x_j exactly).
+    /// terms when `lag_bending` (they enter at the current iterate: see system.rs).
     pub(crate) fn project_all(
         &self,
         x: &[Vec3],
@@ -182,25 +169,43 @@ impl Constraints {
         inputs: &ProjectionInputs,
         q: &mut [Vec3],
     ) {
-        // Halves of about equal stencil entries (a bending term has six or more, an edge two).
-        crate::spin_join::halves(q, &self.ptr, |first, out| {
-            let edges = self.edges.clamp(first, first + out.len()) - first;
-            let (edge_out, rest_out) = out.split_at_mut(edges);
-            for (k, q) in edge_out.iter_mut().enumerate() {
-                let t = first + k;
-                let (i, j) = (self.vertex[2 * t], self.vertex[2 * t + 1]);
-                let edge = x[i as usize] - x[j as usize];
-                *q = stretch::project(edge, self.edge_rest[t]) - start[t];
-            }
-            for (k, q) in rest_out.iter_mut().enumerate() {
-                let t = first + edges + k;
-                let ax = self.apply(t, x);
+        self.map_terms(
+            x,
+            q,
+            |t, edge| stretch::project(edge, self.edge_rest[t]) - start[t],
+            |t, ax| {
                 let base = if lag_bending && self.is_bending(t) {
                     ax
                 } else {
                     start[t]
                 };
-                *q = self.project(t, ax, inputs) - base;
+                self.project(t, ax, inputs) - base
+            },
+        );
+    }
+
+    /// out_t = `edge(t, A_t x)` for the edge springs and `other(t, A_t x)` for the rest, on
+    /// two halves of about equal stencil entries (a bending term has six or more, an edge
+    /// two). The edge springs, most of the terms, take a loop of their own over plain arrays
+    /// (same bits as the general stencil: 0 + 1 x_i - 1 x_j = x_i - x_j exactly).
+    fn map_terms(
+        &self,
+        x: &[Vec3],
+        out: &mut [Vec3],
+        edge: impl Fn(usize, Vec3) -> Vec3 + Sync,
+        other: impl Fn(usize, Vec3) -> Vec3 + Sync,
+    ) {
+        crate::spin_join::halves(out, &self.ptr, |first, out| {
+            let edges = self.edges.clamp(first, first + out.len()) - first;
+            let (edge_out, rest_out) = out.split_at_mut(edges);
+            for (k, o) in edge_out.iter_mut().enumerate() {
+                let t = first + k;
+                let (i, j) = (self.vertex[2 * t], self.vertex[2 * t + 1]);
+                *o = edge(t, x[i as usize] - x[j as usize]);
+            }
+            for (k, o) in rest_out.iter_mut().enumerate() {
+                let t = first + edges + k;
+                *o = other(t, self.apply(t, x));
             }
         });
     }
