@@ -20,3 +20,17 @@ pub mod train;
 /// The burn version the model is written for, for callers that build inputs.
 pub use burn;
 pub use error::{Error, Result};
+
+/// burn's flex backend draws every random tensor from one global generator, so tests that
+/// seed it and draw from it run one at a time: interleaved with another test's draws (the
+/// harness runs tests in parallel) a seeded test would see other numbers on every run.
+#[cfg(test)]
+pub(crate) fn seeded(
+    device: &burn::prelude::Device,
+    seed: u64,
+) -> std::sync::MutexGuard<'static, ()> {
+    static RANDOM: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let guard = RANDOM.lock().unwrap_or_else(|e| e.into_inner());
+    device.seed(seed);
+    guard
+}

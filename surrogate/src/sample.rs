@@ -112,7 +112,7 @@ mod tests {
     #[test]
     fn an_x0_output_is_integrated_to_itself() {
         let device = Device::flex();
-        device.seed(4);
+        let _random = crate::seeded(&device, 4);
         let n = Distribution::Normal(0.0, 1.0);
         let z0 = Tensor::<4>::random([2, 3, 8, 8], n, &device);
         let noise = Tensor::<4>::random([2, 3, 8, 8], n, &device);
@@ -149,7 +149,7 @@ mod tests {
     #[test]
     fn euler_on_the_exact_field_lands_on_the_data_in_any_number_of_steps() {
         let device = Device::flex();
-        device.seed(9);
+        let _random = crate::seeded(&device, 9);
         let n = Distribution::Normal(0.0, 1.0);
         let z0 = Tensor::<4>::random([2, 3, 8, 8], n, &device);
         let noise = Tensor::<4>::random([2, 3, 8, 8], n, &device);

@@ -209,7 +209,7 @@ mod tests {
     #[test]
     fn output_has_the_input_shape_and_depends_on_every_input() {
         let device = Device::flex();
-        device.seed(1);
+        let _random = crate::seeded(&device, 1);
         let model = Dit::new(&tiny(), &device);
         let (x, pos, mask, s, c) = inputs(2, &device);
         let out = model.forward(x.clone(), pos.clone(), mask.clone(), s.clone(), c.clone());
@@ -255,7 +255,7 @@ mod tests {
     #[test]
     fn condition_path_gradients_match_finite_differences() {
         let device = Device::flex();
-        device.seed(4);
+        let _random = crate::seeded(&device, 4);
         let model = Dit::new(&tiny(), &device);
         let autodiff = model.clone().train();
         let (x, pos, mask, s, c) = inputs(2, &device);
@@ -280,7 +280,7 @@ mod tests {
     #[test]
     fn both_depthwise_kinds_give_one_model() {
         let device = Device::flex();
-        device.seed(2);
+        let _random = crate::seeded(&device, 2);
         let shifted = Dit::new(&tiny(), &device);
         let mut conv = shifted.clone();
         for block in &mut conv.blocks {

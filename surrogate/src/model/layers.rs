@@ -245,7 +245,7 @@ pub(crate) mod tests {
     #[test]
     fn shifted_depthwise_equals_conv2d() {
         let device = Device::flex();
-        device.seed(3);
+        let _random = crate::seeded(&device, 3);
         let conv = DepthwiseConv::new(5, &device);
         let x = Tensor::<4>::random([2, 5, 6, 6], Distribution::Normal(0.0, 1.0), &device);
         let a = values(conv.forward(x.clone(), Depthwise::Shifted));
@@ -291,7 +291,7 @@ pub(crate) mod tests {
     #[test]
     fn linear_attention_gradients_match_finite_differences() {
         let device = Device::flex();
-        device.seed(5);
+        let _random = crate::seeded(&device, 5);
         let n = Distribution::Normal(0.0, 1.0);
         let attention = LinearAttention::new(8, 2, &device);
         let weights = Tensor::<3>::random([2, 6, 8], n, &device);

@@ -108,7 +108,7 @@ mod tests {
     #[test]
     fn a_tiny_model_overfits_eight_samples() {
         let device = Device::flex().autodiff();
-        device.seed(7);
+        let _random = crate::seeded(&device, 7);
         // Patch 2 and width 32: white-noise velocity needs a token wide enough to carry it.
         let config = DitConfig {
             patch: 2,
@@ -182,7 +182,7 @@ mod tests {
     #[test]
     fn clipping_scales_to_the_global_norm() {
         let device = Device::flex().autodiff();
-        device.seed(8);
+        let _random = crate::seeded(&device, 8);
         let config = DitConfig {
             depth: 1,
             condition_dim: 3,
