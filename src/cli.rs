@@ -410,9 +410,15 @@ pub enum DatasetCommand {
         /// Texels per side: 32, 64 or 128.
         #[arg(long, default_value_t = 64)]
         resolution: usize,
-        /// `displacement` or `lbs_residual`.
-        #[arg(long, default_value = "displacement", value_parser = ["displacement", "lbs_residual"])]
+        /// `lbs_residual` (canonical cloth minus the template skinned to the body; its tensors
+        /// also hold the body inputs) or `displacement` (minus the rest template, the paper's).
+        #[arg(long, default_value = "lbs_residual", value_parser = ["displacement", "lbs_residual"])]
         target: String,
+        /// Condition scaling: `bounded` (6D rotations unscaled, a pose-velocity block, a std
+        /// floor for the rest) or `zscore` (every value z-scored, no velocities: the layout
+        /// before 2026-12-03).
+        #[arg(long, default_value = "bounded", value_parser = ["bounded", "zscore"])]
+        conditions: String,
         /// Earlier frames in each pose window.
         #[arg(long, default_value_t = 2)]
         window: usize,

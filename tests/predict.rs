@@ -472,3 +472,60 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
     ]);
     assert!(e.contains("no finished sequences"), "{e}");
 }
+
+/// The network's inputs are the same whether they come from the training tensors or from
+/// the predictor (position map, body inputs, scaled conditions), frame by frame.
+#[test]
+fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
+    use surrogate::burn::prelude::Device;
+    use surrogate::data::{Sequence, TrainingTensors};
+    use surrogate::predict::{BodySequence, Predictor};
+    use surrogate::train::TrainedModel;
+
+    let f = fixture();
+    let tensors = TrainingTensors::open(&f.dir.join("tensors")).unwrap();
+    let frames = tensors.frames("test_motion").unwrap();
+    assert!(!frames.bodies.is_empty(), "the tensors hold body inputs");
+    let trained = TrainedModel::load(&f.run, &Device::flex()).unwrap();
+    assert!(trained.config.model.body_inputs);
+    let body = motions::BodyModel::default_body();
+    let predictor = Predictor::new(&trained, &body).unwrap();
+    let sequence = Sequence::read(&f.truth).unwrap();
+    let motion = sequence.motion().unwrap();
+    let seq = BodySequence {
+        motion: &motion,
+        betas: &sequence.betas,
+        material: sequence.meta.material,
+    };
+    let garment = predictor.garment(&sequence.template).unwrap();
+    let inputs = predictor
+        .network_inputs(&garment, &seq, &frames.frame)
+        .unwrap();
+    let (r, d) = (tensors.resolution(), tensors.manifest.condition_dim);
+    let plane = r * r;
+    let g = frames.template[0];
+    let mut expected = Vec::new();
+    for i in 0..frames.len() {
+        expected.extend_from_slice(&tensors.position_maps[g * 3 * plane..(g + 1) * 3 * plane]);
+        expected.extend_from_slice(&frames.bodies[i * 6 * plane..(i + 1) * 6 * plane]);
+    }
+    let worst = |a: &[f32], b: &[f32]| {
+        assert_eq!(a.len(), b.len());
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max)
+    };
+    assert!(
+        worst(&inputs.texels, &expected) < 1e-5,
+        "texel inputs differ"
+    );
+    assert_eq!(inputs.conditions.len(), frames.len() * d);
+    assert!(
+        worst(&inputs.conditions, &frames.conditions) < 1e-5,
+        "conditions differ"
+    );
+    // The body inputs move with the body: two frames apart, they differ.
+    let n = 9 * plane;
+    assert!(worst(&inputs.texels[..n], &inputs.texels[n..2 * n]) > 1e-3);
+}

@@ -168,7 +168,14 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     assert!(names.contains(&"test_motion-0000.safetensors"), "{names:?}");
     let m: Value = json(&a.join("manifest.json"));
     assert_eq!(m["resolution"], 64);
-    assert_eq!(m["target"], "displacement");
+    assert_eq!(m["target"], "lbs_residual");
+    assert_eq!(
+        m["normalization"]["bodies"]["std"]
+            .as_array()
+            .unwrap()
+            .len(),
+        6
+    );
     assert_eq!(m["window"], 2);
     let dim = m["condition_dim"].as_u64().unwrap();
     let blocks = m["condition"].as_array().unwrap();
@@ -193,6 +200,7 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
         let j = common::python_tool("read_tensors.py", &a);
         assert_eq!(j["train"]["targets"], serde_json::json!([8, 3, 64, 64]));
         assert_eq!(j["train"]["conditions"], serde_json::json!([8, dim]));
+        assert_eq!(j["train"]["bodies"], serde_json::json!([8, 6, 64, 64]));
         assert_eq!(
             j["templates"]["position_maps"],
             serde_json::json!([1, 3, 64, 64])

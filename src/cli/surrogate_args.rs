@@ -19,15 +19,17 @@ pub struct EvaluateArgs {
         default_value = "test,test_garment,test_motion,test_shape,test_material"
     )]
     pub splits: Vec<String>,
-    /// Euler steps of the model's sampler.
-    #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
-    pub steps: usize,
+    /// Euler steps of the model's sampler (default: the model's, 1 for a regression model,
+    /// 4 for a flow model).
+    #[arg(long)]
+    pub steps: Option<usize>,
     /// Guidance weight of the `model` rows (`model_no_guidance` uses 0).
     #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
     pub guidance: f64,
-    /// Fraction of the steps done before guidance starts.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
-    pub guidance_start: f64,
+    /// Fraction of the steps done before guidance starts (default: the model's, 0 for a
+    /// regression model, 0.5 for a flow model).
+    #[arg(long, allow_hyphen_values = true)]
+    pub guidance_start: Option<f64>,
     /// Seed of the sampler's noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -98,18 +100,20 @@ pub struct PredictArgs {
     /// Frames holding the first frame after the blend. Default: 30.
     #[arg(long)]
     pub settle_frames: Option<usize>,
-    /// Euler steps from noise to data.
-    #[arg(long, default_value_t = surrogate::predict::DEFAULT_STEPS)]
-    pub steps: usize,
+    /// Euler steps from noise to data (default: the model's, 1 for a regression model, 4
+    /// for a flow model).
+    #[arg(long)]
+    pub steps: Option<usize>,
     /// Time shift of the step schedule (1: uniform; above 1 spends more steps at high noise).
     #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
     pub shift: f64,
     /// Intersection guidance weight (0 turns it off).
     #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
     pub guidance: f64,
-    /// Fraction of the steps done before guidance starts.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 0.5)]
-    pub guidance_start: f64,
+    /// Fraction of the steps done before guidance starts (default: the model's, 0 for a
+    /// regression model, 0.5 for a flow model).
+    #[arg(long, allow_hyphen_values = true)]
+    pub guidance_start: Option<f64>,
     /// Seed of the initial noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,

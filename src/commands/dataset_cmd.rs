@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use sim::dataset::{DatasetSpec, ManifestRecord, PlannedSequence, stats};
 use sim::recording::Recording;
-use surrogate::data::{TensorOptions, write_tensors};
+use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
 use crate::cli::DatasetCommand;
@@ -25,6 +25,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             out,
             resolution,
             target,
+            conditions,
             window,
             every,
             shard_frames,
@@ -52,6 +53,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 window,
                 every,
                 shard_frames,
+                conditions: ConditionScaling::parse(&conditions).context("unknown --conditions")?,
                 ..TensorOptions::default()
             };
             tensors(&dir, &out, model.model.as_deref(), &options, quiet)

@@ -95,7 +95,7 @@ fn predict_and_compare(
     out: &std::path::Path,
     pictures: &std::path::Path,
 ) -> Result<Value> {
-    let settings = Settings::default();
+    let settings = Settings::for_model(trained);
     let path = out.join("predicted.mcap");
     let software = format!("dit-garment {} demo", env!("CARGO_PKG_VERSION"));
     let request = SceneRequest {

@@ -133,20 +133,6 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     if args.json.is_none() && args.report.is_none() {
         bail!("nothing to write: give --json F and/or --report DIR");
     }
-    let settings = Settings {
-        steps: args.steps,
-        guidance: Guidance {
-            weight: args.guidance,
-            start: args.guidance_start,
-            ..Guidance::default()
-        },
-        seed: args.seed,
-        batch: args.batch,
-        ..Settings::default()
-    };
-    if let Err(e) = settings.validate() {
-        bail!("bad sampler settings: {e}");
-    }
     let trained = match args.model.as_str() {
         "none" => None,
         name => {
@@ -157,6 +143,23 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
             )
         }
     };
+    let defaults = trained
+        .as_ref()
+        .map_or_else(Settings::default, Settings::for_model);
+    let settings = Settings {
+        steps: args.steps.unwrap_or(defaults.steps),
+        guidance: Guidance {
+            weight: args.guidance,
+            start: args.guidance_start.unwrap_or(defaults.guidance.start),
+            ..Guidance::default()
+        },
+        seed: args.seed,
+        batch: args.batch,
+        ..Settings::default()
+    };
+    if let Err(e) = settings.validate() {
+        bail!("bad sampler settings: {e}");
+    }
     let body = inputs::body_model(args.body_model.as_deref())?;
     let predictor = trained
         .as_ref()

@@ -18,12 +18,22 @@ use crate::run::{prepare, resolve_config, set_threads};
 pub fn run(args: &PredictArgs) -> Result<()> {
     let started = Instant::now();
     set_threads(args.threads)?;
+    if args.out.is_dir() {
+        bail!(
+            "--out {}: is a folder (give a .mcap file name)",
+            args.out.display()
+        );
+    }
+    let run_dir = model_dir(&args.model)?;
+    let trained = TrainedModel::load(&run_dir, &Device::flex())
+        .with_context(|| format!("loading the model in {}", run_dir.display()))?;
+    let defaults = Settings::for_model(&trained);
     let settings = Settings {
-        steps: args.steps,
+        steps: args.steps.unwrap_or(defaults.steps),
         shift: args.shift,
         guidance: Guidance {
             weight: args.guidance,
-            start: args.guidance_start,
+            start: args.guidance_start.unwrap_or(defaults.guidance.start),
             ..Guidance::default()
         },
         seed: args.seed,
@@ -38,15 +48,6 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     if let Err(e) = settings.validate() {
         bail!("bad sampler settings: {e}");
     }
-    if args.out.is_dir() {
-        bail!(
-            "--out {}: is a folder (give a .mcap file name)",
-            args.out.display()
-        );
-    }
-    let run_dir = model_dir(&args.model)?;
-    let trained = TrainedModel::load(&run_dir, &Device::flex())
-        .with_context(|| format!("loading the model in {}", run_dir.display()))?;
 
     let scene_args = SceneArgs {
         config: None,

@@ -36,6 +36,9 @@ pub struct Conditioned<'a> {
     pub mask: Tensor<4>,
     /// Condition vectors.
     pub conditions: Tensor<2>,
+    /// Whether an `x0` model's estimate is set to zero outside the mask (models trained with
+    /// `zero_outside`: their state there stays the noise they were trained with).
+    pub zero_outside: bool,
 }
 
 impl Velocity for Conditioned<'_> {
@@ -49,6 +52,11 @@ impl Velocity for Conditioned<'_> {
             time,
             self.conditions.clone(),
         );
+        let out = if self.zero_outside && self.model.config.prediction == Prediction::Data {
+            out * self.mask.clone().repeat_dim(1, 3)
+        } else {
+            out
+        };
         as_velocity(self.model.config.prediction, x, out, s)
     }
 }

@@ -7,6 +7,13 @@
 //! | `rotations_6d` | (L + 1) x 22 x 6 | the window's joint rotations (body joints, hands dropped), oldest frame first, each as the first two columns of its rotation matrix; root orientations with the current frame's heading removed (`Motion::pose_window`) |
 //! | `translations` | L x 3 | the L earlier frames' root translations relative to the current frame's, in its heading frame, m |
 //! | `material` | 3 | k_s, rho and log10 k_b, each mapped linearly from the dataset's range to [-1, 1] |
+//! | `velocities_6d` | 22 x 6 | (bounded scaling only) the current frame's 6D rotations minus the previous frame's, per second |
+//!
+//! How each block is scaled for the network is recorded with it ([`BlockScaling`]): with the
+//! `bounded` layout the 6D rotations are left as they are (they are bounded, and dividing a
+//! nearly constant spine component by its training std sent held-out motions to -164 std),
+//! the velocities share one scale, and the other blocks are z-scored with a floor under each
+//! std.
 
 use motions::Motion;
 use motions::rotation::axis_angle_to_matrix;
@@ -14,11 +21,30 @@ use serde::{Deserialize, Serialize};
 use sim::Material;
 use sim::dataset::MaterialRanges;
 
+use super::tensors::Stats;
 use crate::error::Result;
 
 /// Joints whose rotations enter the condition: SMPL's 22 body joints (the hands are dropped:
 /// the built-in motions and AMASS imports leave them at rest).
 pub const CONDITION_JOINTS: usize = 22;
+
+/// How a block of the condition vector is scaled before the network sees it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BlockScaling {
+    /// Each value minus its training mean over its training std (1 where constant).
+    #[default]
+    ZScore,
+    /// Each value minus its training mean over its training std, the std floored at a
+    /// quarter of the block's pooled std (a value that hardly varies in training is not
+    /// blown up where it does vary).
+    ZScoreFloored,
+    /// Left as it is (mean 0, std 1).
+    None,
+    /// Divided by the block's root mean square over training (one scale for the block,
+    /// mean 0).
+    Pooled,
+}
 
 /// One named block of the condition vector.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -29,6 +55,44 @@ pub struct Block {
     pub offset: usize,
     /// Length.
     pub size: usize,
+    /// How its values are scaled for the network (manifests written before the key:
+    /// `z_score`).
+    #[serde(default)]
+    pub scaling: BlockScaling,
+    /// What it holds, in words, with units.
+    #[serde(default)]
+    pub content: String,
+}
+
+/// Which condition layout and scaling a dataset's tensors use.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConditionScaling {
+    /// Every value z-scored; no velocity block (the layout before issue 39).
+    #[default]
+    ZScore,
+    /// 6D rotations unscaled, a velocity block with one scale, the rest z-scored with a
+    /// std floor.
+    Bounded,
+}
+
+impl ConditionScaling {
+    /// The name used by flags and files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ZScore => "zscore",
+            Self::Bounded => "bounded",
+        }
+    }
+
+    /// Parses a flag value.
+    pub fn parse(text: &str) -> Option<Self> {
+        match text {
+            "zscore" => Some(Self::ZScore),
+            "bounded" => Some(Self::Bounded),
+            _ => None,
+        }
+    }
 }
 
 /// Maps `x` from `[lo, hi]` to [-1, 1] (0 for an empty range).
@@ -49,30 +113,104 @@ pub struct ConditionLayout {
     pub window: usize,
     /// Material normalization.
     pub material: MaterialRanges,
+    /// Layout and scaling (with `bounded`, a velocity block follows the material).
+    #[serde(default)]
+    pub scaling: ConditionScaling,
 }
+
+/// The name of the velocity block.
+pub const VELOCITIES: &str = "velocities_6d";
 
 impl ConditionLayout {
     /// The named blocks, in order.
     pub fn blocks(&self) -> Vec<Block> {
-        let sizes = [
-            ("betas", self.betas),
-            ("rotations_6d", (self.window + 1) * CONDITION_JOINTS * 6),
-            ("translations", self.window * 3),
-            ("material", 3),
+        let bounded = self.scaling == ConditionScaling::Bounded;
+        let pick = |new: BlockScaling| {
+            if bounded { new } else { BlockScaling::ZScore }
+        };
+        let mut sizes = vec![
+            (
+                "betas",
+                self.betas,
+                pick(BlockScaling::ZScoreFloored),
+                "shape coefficients of the frame",
+            ),
+            (
+                "rotations_6d",
+                (self.window + 1) * CONDITION_JOINTS * 6,
+                pick(BlockScaling::None),
+                "the window's 22 body-joint rotations, oldest frame first, first two matrix columns; root heading of the current frame removed",
+            ),
+            (
+                "translations",
+                self.window * 3,
+                pick(BlockScaling::ZScoreFloored),
+                "earlier frames' root translations relative to the current frame, heading frame, m",
+            ),
+            (
+                "material",
+                3,
+                pick(BlockScaling::ZScoreFloored),
+                "k_s, rho, log10 k_b mapped linearly from the dataset's ranges to [-1, 1]",
+            ),
         ];
+        if bounded {
+            sizes.push((
+                VELOCITIES,
+                CONDITION_JOINTS * 6,
+                BlockScaling::Pooled,
+                "current minus previous frame's 6D rotations, per second",
+            ));
+        }
         let mut offset = 0;
         sizes
             .into_iter()
-            .map(|(name, size)| {
+            .map(|(name, size, scaling, content)| {
                 let block = Block {
                     name: name.to_string(),
                     offset,
                     size,
+                    scaling,
+                    content: content.to_string(),
                 };
                 offset += size;
                 block
             })
             .collect()
+    }
+
+    /// The scaling statistics of condition vectors from their per-value sums and sums of
+    /// squares over `count` training frames, block by block as [`Block::scaling`] says.
+    pub fn statistics(&self, sum: &[f64], sum2: &[f64], count: f64) -> Stats {
+        let n = count.max(1.0);
+        let (mut mean, mut std) = (vec![0.0; sum.len()], vec![1.0; sum.len()]);
+        for block in self.blocks() {
+            let range = block.offset..block.offset + block.size;
+            let var = |d: usize| (sum2[d] / n - (sum[d] / n).powi(2)).max(0.0);
+            let pooled_var = range.clone().map(var).sum::<f64>() / block.size.max(1) as f64;
+            for d in range.clone() {
+                match block.scaling {
+                    BlockScaling::None => {}
+                    BlockScaling::ZScore => {
+                        mean[d] = sum[d] / n;
+                        std[d] = if var(d) > 1e-24 { var(d).sqrt() } else { 1.0 };
+                    }
+                    BlockScaling::ZScoreFloored => {
+                        mean[d] = sum[d] / n;
+                        let floor = 0.25 * pooled_var.sqrt();
+                        let s = var(d).sqrt().max(floor);
+                        std[d] = if s > 1e-12 { s } else { 1.0 };
+                    }
+                    BlockScaling::Pooled => {
+                        let rms = (range.clone().map(|d| sum2[d] / n).sum::<f64>()
+                            / block.size.max(1) as f64)
+                            .sqrt();
+                        std[d] = if rms > 1e-12 { rms } else { 1.0 };
+                    }
+                }
+            }
+        }
+        Stats { mean, std }
     }
 
     /// Length of a condition vector.
@@ -107,6 +245,20 @@ impl ConditionLayout {
         out.push(to_unit(material.stretch, m.k_s));
         out.push(to_unit(material.density, m.rho));
         out.push(to_unit(material.bending.log10(), m.log10_k_b));
+        if self.scaling == ConditionScaling::Bounded {
+            // Within the current frame's heading frame, so the root's turning rate is kept.
+            let (now, before) = (
+                &window.poses[self.window],
+                &window.poses[self.window.max(1) - 1],
+            );
+            for j in 0..CONDITION_JOINTS {
+                let a = axis_angle_to_matrix([now[3 * j], now[3 * j + 1], now[3 * j + 2]]);
+                let b = axis_angle_to_matrix([before[3 * j], before[3 * j + 1], before[3 * j + 2]]);
+                for col in 0..2 {
+                    out.extend((0..3).map(|row| (a[(row, col)] - b[(row, col)]) * motion.fps));
+                }
+            }
+        }
         Ok(out)
     }
 }
@@ -135,6 +287,7 @@ mod tests {
             betas: 10,
             window: 2,
             material: MaterialRanges::default(),
+            scaling: ConditionScaling::ZScore,
         };
         let material = Material {
             stretch: 120.0,
@@ -165,5 +318,80 @@ mod tests {
         let m = &v[blocks[3].offset..];
         assert!((m[0] - 0.0).abs() < 1e-12 && (m[1] + 1.0).abs() < 1e-12);
         assert!((m[2] - 1.0).abs() < 1e-12, "{m:?}");
+    }
+
+    #[test]
+    fn the_bounded_layout_adds_velocities_and_scales_block_by_block() {
+        let frame = |knee: f64| {
+            let mut pose = [0.0; POSE_DIM];
+            pose[3 * 4] = knee;
+            FramePose {
+                pose,
+                transl: [0.0, 0.9, 0.0],
+            }
+        };
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        let motion =
+            Motion::new("test", 30.0, vec![frame(0.0), frame(0.0), frame(half_pi)]).unwrap();
+        let layout = ConditionLayout {
+            betas: 10,
+            window: 2,
+            material: MaterialRanges::default(),
+            scaling: ConditionScaling::Bounded,
+        };
+        assert_eq!(layout.dim(), 415 + 22 * 6);
+        let blocks = layout.blocks();
+        let velocities = blocks.iter().find(|b| b.name == VELOCITIES).unwrap();
+        let material = Material {
+            stretch: 120.0,
+            density: 0.01,
+            bending: 1e-4,
+        };
+        let v = layout.vector(&motion, 2, &[], &material).unwrap();
+        // The left knee turned by 90 degrees in one frame at 30 fps: second column
+        // (0, 0, 1) - (0, 1, 0), per second.
+        let knee = velocities.offset + 4 * 6;
+        let expected = [0.0, 0.0, 0.0, 0.0, -30.0, 30.0];
+        for (a, b) in v[knee..knee + 6].iter().zip(expected) {
+            assert!((a - b).abs() < 1e-9, "{:?}", &v[knee..knee + 6]);
+        }
+        // Statistics: two "frames" per value, sums and sums of squares.
+        let dim = layout.dim();
+        let (mut sum, mut sum2) = (vec![0.0; dim], vec![0.0; dim]);
+        for (d, (s, s2)) in sum.iter_mut().zip(&mut sum2).enumerate() {
+            // Values x and -x + 2 c: mean c, std x - c; betas 0 and 1 vary by 1, beta 2 not.
+            let (a, b) = match d {
+                0 | 1 => (1.0, 3.0),
+                2 => (5.0, 5.0),
+                _ => (2.0, -2.0),
+            };
+            *s = a + b;
+            *s2 = a * a + b * b;
+        }
+        let stats = layout.statistics(&sum, &sum2, 2.0);
+        // Betas: z-scored; the constant one floored at a quarter of the block's pooled std.
+        assert_eq!((stats.mean[0], stats.std[0]), (2.0, 1.0));
+        let pooled = (2.0f64 / 10.0 * 1.0 + 7.0 / 10.0 * 4.0).sqrt();
+        assert!(
+            (stats.std[2] - 0.25 * pooled).abs() < 1e-12,
+            "{}",
+            stats.std[2]
+        );
+        // Rotations unscaled; velocities by their pooled root mean square (2).
+        let rot = blocks[1].offset;
+        assert_eq!((stats.mean[rot], stats.std[rot]), (0.0, 1.0));
+        let vel = velocities.offset;
+        assert_eq!((stats.mean[vel], stats.std[vel]), (0.0, 2.0));
+        // The old layout z-scores everything and has no velocities.
+        let old = ConditionLayout {
+            scaling: ConditionScaling::ZScore,
+            ..layout
+        };
+        assert_eq!(old.dim(), 415);
+        assert!(
+            old.blocks()
+                .iter()
+                .all(|b| b.scaling == BlockScaling::ZScore)
+        );
     }
 }

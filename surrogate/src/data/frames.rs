@@ -32,6 +32,8 @@ pub struct Frames {
     pub conditions: Vec<f32>,
     /// `[N, 3, R, R]` flat.
     pub targets: Vec<f32>,
+    /// Body inputs `[N, 6, R, R]` flat (empty where the tensors have none).
+    pub bodies: Vec<f32>,
     /// Template of every frame.
     pub template: Vec<usize>,
     /// Manifest line of every frame's sequence.
@@ -198,6 +200,17 @@ impl TrainingTensors {
                 &path,
             )?);
             normalize_channels(&mut targets, &m.normalization.targets, r * r);
+            if let Some(stats) = &m.normalization.bodies {
+                let mut bodies = f32s(tensor_bytes(
+                    &file,
+                    "bodies",
+                    Dtype::F32,
+                    &[f, crate::model::BODY_CHANNELS, r, r],
+                    &path,
+                )?);
+                normalize_channels(&mut bodies, stats, r * r);
+                out.bodies.extend(bodies);
+            }
             let index = |name: &str, bound: usize| {
                 tensor_bytes(&file, name, Dtype::I64, &[f], &path)
                     .and_then(|b| indices(b, bound, name, &path))

@@ -9,11 +9,13 @@ mod tensors;
 
 pub(crate) use tensors::sha256_hex;
 
-pub use conditions::{Block, CONDITION_JOINTS, ConditionLayout};
+pub use conditions::{
+    Block, BlockScaling, CONDITION_JOINTS, ConditionLayout, ConditionScaling, VELOCITIES,
+};
 pub use frames::{Frames, TrainingTensors};
 pub use sequence::{Floor, Sequence, roundtrip_floor};
 pub(crate) use tensors::channels_first;
 pub use tensors::{
     Normalization, ShardInfo, SplitInfo, Stats, TemplateInfo, TensorManifest, TensorOptions,
-    write_tensors,
+    body_input_maps, write_tensors,
 };

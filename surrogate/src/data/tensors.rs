@@ -1,6 +1,7 @@
 //! A synthesized dataset (`synth` output) as training tensors: per split, safetensors shards
-//! of frames (`conditions` [N, D] f32, `targets` [N, 3, R, R] f32, `template_index` [N] i64,
-//! `sequence_index` and `frame_index` [N] i64), `templates.safetensors` (`position_maps`
+//! of frames (`conditions` [N, D] f32, `targets` [N, 3, R, R] f32, for `lbs_residual` also
+//! `bodies` [N, 6, R, R] f32 (the skinned template and its change since the previous frame,
+//! canonical, m), `template_index` [N] i64, `sequence_index` and `frame_index` [N] i64), `templates.safetensors` (`position_maps`
 //! [G, 3, R, R], `masks` [G, 1, R, R], `inside` [G, 1, R, R]) and `manifest.json` (layout,
 //! normalization statistics of the train split, counts, checksums). Same input, same bytes.
 
@@ -15,10 +16,10 @@ use sha2::{Digest, Sha256};
 use sim::dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
 use sim::recording::{Recording, TemplateArrays};
 
-use super::conditions::{Block, ConditionLayout};
+use super::conditions::{Block, ConditionLayout, ConditionScaling};
 use super::sequence::Sequence;
 use crate::error::{Result, file_error};
-use crate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
+use crate::geometry::{FrameBody, GeometryImage, RootRemoval, TargetKind, Targets};
 
 /// How a dataset becomes tensors.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -35,6 +36,8 @@ pub struct TensorOptions {
     pub root: RootRemoval,
     /// Frames per shard.
     pub shard_frames: usize,
+    /// Condition layout and scaling.
+    pub conditions: ConditionScaling,
 }
 
 impl Default for TensorOptions {
@@ -46,6 +49,7 @@ impl Default for TensorOptions {
             every: 1,
             root: RootRemoval::Heading,
             shard_frames: 2048,
+            conditions: ConditionScaling::Bounded,
         }
     }
 }
@@ -113,6 +117,10 @@ pub struct Normalization {
     pub conditions: Stats,
     /// Per channel of the position maps of the templates train frames use, over inside texels.
     pub position_maps: Stats,
+    /// Per channel of the body inputs over the loss-mask texels of train frames (none where
+    /// the tensors have no body inputs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bodies: Option<Stats>,
 }
 
 /// `manifest.json` of a tensors folder.
@@ -160,6 +168,34 @@ impl TensorManifest {
             .all(|s| s.mean.len() == 3 && s.std.len() == 3)
             && n.conditions.mean.len() == self.condition_dim
             && n.conditions.std.len() == self.condition_dim
+            && n.bodies.as_ref().is_none_or(|s| {
+                s.mean.len() == crate::model::BODY_CHANNELS
+                    && s.std.len() == crate::model::BODY_CHANNELS
+            })
+    }
+
+    /// Whether the shards hold body inputs.
+    pub fn has_bodies(&self) -> bool {
+        self.normalization.bodies.is_some()
+    }
+
+    /// The condition layout the manifest records, on a body model with `betas` shape
+    /// coefficients.
+    pub fn condition_layout(&self, betas: usize) -> ConditionLayout {
+        let bounded = self
+            .condition
+            .iter()
+            .any(|b| b.name == super::conditions::VELOCITIES);
+        ConditionLayout {
+            betas,
+            window: self.window,
+            material: self.material_ranges,
+            scaling: if bounded {
+                ConditionScaling::Bounded
+            } else {
+                ConditionScaling::ZScore
+            },
+        }
     }
 }
 
@@ -167,9 +203,28 @@ impl TensorManifest {
 struct Frame {
     condition: Vec<f32>,
     target: Vec<f32>,
+    /// `[6, R, R]`, empty without body inputs.
+    bodies: Vec<f32>,
     template: usize,
     sequence: usize,
     frame: usize,
+}
+
+/// The body inputs of a frame as maps, channels first `[6, R, R]` (m, un-normalized): the
+/// template skinned to body `now` and its change since body `before`, both in `now`'s
+/// canonical frame. Training tensors and prediction both call this, so the two paths give
+/// the same inputs.
+pub fn body_input_maps(
+    targets: &mut Targets,
+    image: &GeometryImage,
+    model: &BodyModel,
+    now: FrameBody,
+    before: FrameBody,
+) -> Result<Vec<f32>> {
+    let [base, change] = targets.body_inputs(model, now, before)?;
+    let mut out = channels_first(&image.encode(&base)?);
+    out.extend(channels_first(&image.encode(&change)?));
+    Ok(out)
 }
 
 /// Channels-last `[f64; 3]` texels as channels-first f32 `[3, R, R]`.
@@ -290,7 +345,9 @@ pub fn write_tensors(
         betas: model.num_betas(),
         window: options.window,
         material: spec.material,
+        scaling: options.conditions,
     };
+    let with_bodies = options.target == TargetKind::LbsResidual;
     // Templates by garment name, from the recordings (sorted names give the indices).
     let mut names: Vec<&str> = records.iter().map(|r| r.garment.as_str()).collect();
     names.sort_unstable();
@@ -328,6 +385,7 @@ pub fn write_tensors(
     let dim = layout.dim();
     let (mut t_sum, mut t_sum2, mut t_count) = (vec![0.0; 3], vec![0.0; 3], 0.0);
     let (mut c_sum, mut c_sum2, mut c_count) = (vec![0.0; dim], vec![0.0; dim], 0.0);
+    let (mut b_sum, mut b_sum2) = (vec![0.0; 6], vec![0.0; 6]);
     let mut train_templates = vec![false; templates.len()];
     for split in SPLITS {
         let members: Vec<usize> = (0..records.len())
@@ -357,9 +415,17 @@ pub fn write_tensors(
                     let condition = layout.vector(&motion, k, &s.betas[k], &s.meta.material)?;
                     let target = targets.encode(model, s.body(k), &s.garment[k])?;
                     let map = image.encode(&target).map_err(|e| file_error(path, e))?;
+                    let bodies = if with_bodies {
+                        let before = s.body(k.saturating_sub(1));
+                        body_input_maps(&mut targets, image, model, s.body(k), before)
+                            .map_err(|e| file_error(path, e))?
+                    } else {
+                        Vec::new()
+                    };
                     out.push(Frame {
                         condition: condition.iter().map(|&x| x as f32).collect(),
                         target: channels_first(&map),
+                        bodies,
                         template: g,
                         sequence: i,
                         frame: k,
@@ -380,6 +446,15 @@ pub fn write_tensors(
                             let x = f.target[c * r * r + k] as f64;
                             t_sum[c] += x;
                             t_sum2[c] += x * x;
+                        }
+                    }
+                }
+                for c in 0..f.bodies.len() / (r * r) {
+                    for (k, &m) in mask.iter().enumerate() {
+                        if m {
+                            let x = f.bodies[c * r * r + k] as f64;
+                            b_sum[c] += x;
+                            b_sum2[c] += x * x;
                         }
                     }
                 }
@@ -413,6 +488,19 @@ pub fn write_tensors(
                 .iter()
                 .flat_map(|f| f.target.iter().copied())
                 .collect();
+            let mut tensors = Vec::new();
+            if with_bodies {
+                let bodies: Vec<f32> = chunk
+                    .iter()
+                    .flat_map(|f| f.bodies.iter().copied())
+                    .collect();
+                tensors.push((
+                    "bodies",
+                    Dtype::F32,
+                    vec![count, 6, r, r],
+                    f32_bytes(&bodies),
+                ));
+            }
             let bytes = safetensors_bytes(
                 &[
                     (
@@ -445,7 +533,10 @@ pub fn write_tensors(
                         vec![count],
                         i64_bytes(chunk.iter().map(|f| f.frame)),
                     ),
-                ],
+                ]
+                .into_iter()
+                .chain(tensors)
+                .collect::<Vec<_>>(),
                 &path,
             )?;
             let sha256 = write_atomic(&path, &bytes)?;
@@ -494,7 +585,7 @@ pub fn write_tensors(
     )?;
     let templates_sha256 = write_atomic(&path, &bytes)?;
     let manifest = TensorManifest {
-        format: 1,
+        format: 2,
         source: dir.display().to_string(),
         resolution: r,
         target: options.target,
@@ -520,8 +611,9 @@ pub fn write_tensors(
         templates_sha256,
         normalization: Normalization {
             targets: stats(&t_sum, &t_sum2, t_count),
-            conditions: stats(&c_sum, &c_sum2, c_count),
+            conditions: layout.statistics(&c_sum, &c_sum2, c_count),
             position_maps: stats(&p_sum, &p_sum2, p_count),
+            bodies: with_bodies.then(|| stats(&b_sum, &b_sum2, t_count)),
         },
     };
     let json = serde_json::to_vec_pretty(&manifest).map_err(|e| file_error(out, e))?;

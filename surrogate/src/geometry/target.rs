@@ -156,6 +156,32 @@ impl Targets {
         Ok(FrameBase { canonical, base })
     }
 
+    /// The body inputs of a frame (body `now`, previous frame's body `before`), per vertex
+    /// in the frame's canonical frame, m: the template skinned to the body, and its change
+    /// since the previous frame (both skinned templates in `now`'s canonical frame, so the
+    /// root's own motion is in it). Only an `lbs_residual` target has the skinning.
+    pub fn body_inputs(
+        &mut self,
+        model: &BodyModel,
+        now: FrameBody,
+        before: FrameBody,
+    ) -> Result<[Vec<[f64; 3]>; 2]> {
+        if self.skinning.is_none() {
+            return Err(crate::error::Error::Invalid(
+                "body inputs need the lbs_residual target's skinning".into(),
+            ));
+        }
+        let previous = self.frame_base(model, before)?;
+        let previous_world = previous.decode(&vec![[0.0; 3]; self.template.len()]);
+        let current = self.frame_base(model, now)?;
+        let change = current
+            .encode(&previous_world)
+            .into_iter()
+            .map(|d| [-d[0], -d[1], -d[2]])
+            .collect();
+        Ok([current.base, change])
+    }
+
     /// The per-vertex target of a frame whose cloth is at `garment` (world, m).
     pub fn encode(
         &mut self,

@@ -5,8 +5,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::TargetKind;
 
-/// Channels of the network's input image: noisy target (3), position map (3), mask (1).
+/// Channels of the network's input image without body inputs: noisy target (3), position map
+/// (3), mask (1).
 pub const INPUT_CHANNELS: usize = 7;
+/// Channels the body inputs add: the skinned base (canonical, 3) and its change since the
+/// previous frame (3).
+pub const BODY_CHANNELS: usize = 6;
 /// Channels of its output: the velocity of the target map, or the map itself.
 pub const OUTPUT_CHANNELS: usize = 3;
 /// Width of the sinusoidal timestep features (Sana's and DiT's 256).
@@ -72,6 +76,11 @@ pub struct DitConfig {
     /// What the output is (`velocity` or `x0`).
     #[serde(default = "Prediction::before_the_key")]
     pub prediction: Prediction,
+    /// Whether every texel also sees the body: the template skinned to the frame's body
+    /// (canonical frame) and its change since the previous frame, 6 more input channels (a
+    /// saved configuration without the key has none).
+    #[serde(default)]
+    pub body_inputs: bool,
 }
 
 impl Default for DitConfig {
@@ -92,6 +101,7 @@ impl Default for DitConfig {
             // samples/s at patch 4, 2.6 vs 1.8 at patch 2; docs/BENCHMARKS.md).
             depthwise: Depthwise::Conv2d,
             prediction: Prediction::Data,
+            body_inputs: true,
         }
     }
 }
@@ -131,6 +141,17 @@ impl DitConfig {
             return bad("condition_dim", &self.condition_dim, "must be 1 to 65536");
         }
         Ok(())
+    }
+
+    /// Channels of the input image: noisy target, position map (plus the body inputs), mask.
+    pub fn input_channels(&self) -> usize {
+        INPUT_CHANNELS + if self.body_inputs { BODY_CHANNELS } else { 0 }
+    }
+
+    /// Channels of the per-texel inputs that come with the template and the body: the
+    /// position map, then the body inputs when the model takes them.
+    pub fn texel_channels(&self) -> usize {
+        self.input_channels() - 4
     }
 
     /// Tokens per side of the token grid.

@@ -9,7 +9,7 @@ use burn::nn::{Linear, LinearConfig};
 use burn::prelude::*;
 use burn::tensor::activation::silu;
 
-use super::config::{DitConfig, INPUT_CHANNELS, OUTPUT_CHANNELS};
+use super::config::{DitConfig, OUTPUT_CHANNELS};
 use super::layers::{CrossAttention, LinearAttention, MixFfn, norm, timestep_features};
 
 /// Timestep MLP: 256 sinusoidal features -> Linear -> SiLU -> Linear.
@@ -106,7 +106,7 @@ impl Dit {
             })
             .collect();
         let model = Self {
-            patch_embed: LinearConfig::new(INPUT_CHANNELS * p * p, c).init(device),
+            patch_embed: LinearConfig::new(config.input_channels() * p * p, c).init(device),
             t_embed: TimestepEmbedder {
                 fc1: LinearConfig::new(super::config::FREQUENCY_DIM, c).init(device),
                 fc2: LinearConfig::new(c, c).init(device),
@@ -126,8 +126,27 @@ impl Dit {
         model
     }
 
-    /// Noisy target `[B, 3, R, R]`, position map `[B, 3, R, R]`, mask `[B, 1, R, R]`,
-    /// timestep `[B]` in [0, 1], conditions `[B, D]` -> velocity `[B, 3, R, R]`.
+    /// Starts the layers that write into the residual stream's output, the final linear and
+    /// every cross-attention's projection, at zero (PixArt's and Sana's choice): the first
+    /// steps learn from the conditions instead of undoing a random output.
+    pub fn zero_output_layers(mut self) -> Self {
+        let device = self.final_linear.weight.device();
+        let zero = |linear: &mut Linear| {
+            let [i, o] = linear.weight.dims();
+            linear.weight = Initializer::Zeros.init([i, o], &device);
+            linear.bias = Some(Initializer::Zeros.init([o], &device));
+        };
+        zero(&mut self.final_linear);
+        for block in &mut self.blocks {
+            zero(&mut block.cross.proj);
+        }
+        self
+    }
+
+    /// Noisy target `[B, 3, R, R]`, texel inputs `[B, P, R, R]` (the position map, then with
+    /// `body_inputs` the skinned base and its change: P = [`DitConfig::texel_channels`]),
+    /// mask `[B, 1, R, R]`, timestep `[B]` in [0, 1], conditions `[B, D]` -> the velocity or
+    /// the clean map `[B, 3, R, R]`.
     pub fn forward(
         &self,
         noisy: Tensor<4>,
@@ -137,13 +156,13 @@ impl Dit {
         conditions: Tensor<2>,
     ) -> Tensor<4> {
         let x = Tensor::cat(vec![noisy, position, mask], 1);
-        let [b, _, r, _] = x.dims();
+        let [b, channels, r, _] = x.dims();
         let (p, c) = (self.config.patch, self.config.width);
         let g = r / p;
         let tokens = x
-            .reshape([b, INPUT_CHANNELS, g, p, g, p])
+            .reshape([b, channels, g, p, g, p])
             .permute([0, 2, 4, 1, 3, 5])
-            .reshape([b, g * g, INPUT_CHANNELS * p * p]);
+            .reshape([b, g * g, channels * p * p]);
         let mut h = self.patch_embed.forward(tokens); // [B, N, C]
         let t = self
             .t_embed

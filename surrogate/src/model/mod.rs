@@ -7,7 +7,7 @@ mod dit;
 mod layers;
 
 pub use config::{
-    Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, OUTPUT_CHANNELS, Prediction,
+    BODY_CHANNELS, Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, OUTPUT_CHANNELS, Prediction,
 };
 pub use dit::{Block, ConditionEmbedder, Dit, TimestepEmbedder};
 pub use layers::{CrossAttention, DepthwiseConv, LinearAttention, MixFfn, norm, timestep_features};
@@ -25,6 +25,7 @@ pub(crate) mod tests {
             mlp_ratio: 2.0,
             condition_tokens: 2,
             condition_dim: 5,
+            body_inputs: false,
             ..super::DitConfig::default()
         }
     }

@@ -23,11 +23,11 @@ use sim::Material;
 use sim::obstacles::MeshSurface;
 use sim::recording::TemplateArrays;
 
-use crate::data::{ConditionLayout, channels_first};
+use crate::data::{ConditionLayout, body_input_maps, channels_first};
 use crate::error::{Error, Result};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
 use crate::sample::{Conditioned, euler, time_grid};
-use crate::train::{TrainedModel, generator, normal};
+use crate::train::{Objective, TrainedModel, generator, normal};
 
 /// Euler steps by default (chosen from the steps sweep in docs/SURROGATE.md).
 pub const DEFAULT_STEPS: usize = 4;
@@ -81,6 +81,24 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// The defaults for `trained`: a regression model (trained at s = 1 only) is sampled in
+    /// one step, guided on that step; a flow model in [`DEFAULT_STEPS`], guided over the
+    /// second half (docs/SURROGATE.md, the model card).
+    pub fn for_model(trained: &TrainedModel) -> Self {
+        let defaults = Self::default();
+        match trained.config.training.objective {
+            Objective::Regression => Self {
+                steps: 1,
+                guidance: Guidance {
+                    start: 0.0,
+                    ..defaults.guidance
+                },
+                ..defaults
+            },
+            Objective::Flow => defaults,
+        }
+    }
+
     /// Checks the values, naming the first bad one.
     pub fn validate(&self) -> std::result::Result<(), String> {
         if !(1..=1000).contains(&self.steps) {
@@ -167,6 +185,16 @@ impl PreparedGarment {
     }
 }
 
+/// What the network is given for a set of frames (normalized, channels first).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NetworkInputs {
+    /// Texel inputs `[F, P, R, R]`: the position map, then the body inputs when the model
+    /// takes them.
+    pub texels: Vec<f32>,
+    /// Condition vectors `[F, D]`.
+    pub conditions: Vec<f32>,
+}
+
 /// A trained model on a body model.
 pub struct Predictor<'a> {
     trained: &'a TrainedModel,
@@ -213,12 +241,13 @@ impl<'a> Predictor<'a> {
                 body.name()
             )));
         }
-        let layout = ConditionLayout {
-            betas: body.num_betas(),
-            window: data.window,
-            material: data.material_ranges,
-        };
-        if layout.dim() != data.condition_dim {
+        let layout = data.condition_layout(body.num_betas());
+        let same_blocks = layout
+            .blocks()
+            .iter()
+            .zip(&data.condition)
+            .all(|(a, b)| (&a.name, a.offset, a.size) == (&b.name, b.offset, b.size));
+        if layout.dim() != data.condition_dim || !same_blocks {
             return Err(Error::Invalid(format!(
                 "the model in {} takes {} condition values; '{}' with a window of {} gives {}",
                 trained.run.display(),
@@ -312,23 +341,18 @@ impl<'a> Predictor<'a> {
         let lanes = rayon::current_num_threads().max(1);
         let mut timing = Timing::default();
         let all: Vec<usize> = frames.collect();
+        // Each lane keeps its frames' body surfaces and refits them to the next batch's
+        // bodies instead of building them again.
+        let mut pools: Vec<Vec<MeshSurface>> = (0..lanes).map(|_| Vec::new()).collect();
+        let garment: &PreparedGarment = garment;
         for round in all.chunks(settings.batch * lanes) {
             let started = Instant::now();
-            let mut bases = Vec::with_capacity(round.len());
-            for &k in round {
-                let body = FrameBody {
-                    pose: &motion.frames[k],
-                    betas: &seq.betas[k],
-                };
-                bases.push(garment.targets.frame_base(self.body, body)?);
-            }
-            let garment: &PreparedGarment = garment;
             let results = round
                 .chunks(settings.batch)
-                .zip(bases.chunks(settings.batch))
+                .zip(pools.iter_mut())
                 .collect::<Vec<_>>()
                 .into_par_iter()
-                .map(|(chunk, bases)| self.sample_batch(garment, seq, chunk, bases, settings))
+                .map(|(chunk, pool)| self.sample_batch(garment, seq, chunk, pool, settings))
                 .collect::<Result<Vec<_>>>()?;
             timing.wall_s += started.elapsed().as_secs_f64();
             for (frames, t) in results {
@@ -343,37 +367,97 @@ impl<'a> Predictor<'a> {
         Ok(timing)
     }
 
-    /// Samples one batch of frames (their bases given) and decodes it.
+    /// The network's inputs for `frames` of `seq`, normalized as in training: what the tensors
+    /// of a recorded sequence hold for the same frames (tested).
+    pub fn network_inputs(
+        &self,
+        garment: &PreparedGarment,
+        seq: &BodySequence,
+        frames: &[usize],
+    ) -> Result<NetworkInputs> {
+        let mut targets = garment.targets.clone();
+        Ok(self.inputs_of(garment, &mut targets, seq, frames)?.1)
+    }
+
+    /// The frames' bases and network inputs.
+    fn inputs_of(
+        &self,
+        garment: &PreparedGarment,
+        targets: &mut Targets,
+        seq: &BodySequence,
+        frames: &[usize],
+    ) -> Result<(Vec<FrameBase>, NetworkInputs)> {
+        let data = &self.trained.data;
+        let plane = data.resolution.pow(2);
+        let model = &self.trained.config.model;
+        let body_of = |k: usize| FrameBody {
+            pose: &seq.motion.frames[k],
+            betas: &seq.betas[k],
+        };
+        let bases = frames
+            .iter()
+            .map(|&k| targets.frame_base(self.body, body_of(k)))
+            .collect::<Result<Vec<FrameBase>>>()?;
+        let stats = &data.normalization;
+        let mut inputs = NetworkInputs {
+            texels: Vec::with_capacity(frames.len() * model.texel_channels() * plane),
+            conditions: Vec::with_capacity(frames.len() * data.condition_dim),
+        };
+        for &k in frames {
+            inputs.texels.extend_from_slice(&garment.position);
+            if model.body_inputs {
+                let bodies = stats.bodies.as_ref().ok_or_else(|| {
+                    Error::Invalid(
+                        "the model takes body inputs; its tensors.json has no statistics for them"
+                            .into(),
+                    )
+                })?;
+                let before = body_of(k.saturating_sub(1));
+                let maps = body_input_maps(targets, &garment.image, self.body, body_of(k), before)?;
+                inputs
+                    .texels
+                    .extend(maps.chunks(plane).enumerate().flat_map(|(c, p)| {
+                        let (m, s) = (bodies.mean[c] as f32, bodies.std[c] as f32);
+                        p.iter().map(move |v| (v - m) / s)
+                    }));
+            }
+            let c = self
+                .layout
+                .vector(seq.motion, k, &seq.betas[k], &seq.material)?;
+            let (m, s) = (&stats.conditions.mean, &stats.conditions.std);
+            inputs.conditions.extend(
+                c.iter()
+                    .enumerate()
+                    .map(|(d, &x)| (x as f32 - m[d] as f32) / s[d] as f32),
+            );
+        }
+        Ok((bases, inputs))
+    }
+
+    /// Samples one batch of frames and decodes it; `surfaces` are body surfaces to refit
+    /// (one per frame, grown as needed).
     fn sample_batch(
         &self,
         garment: &PreparedGarment,
         seq: &BodySequence,
         chunk: &[usize],
-        bases: &[FrameBase],
+        surfaces: &mut Vec<MeshSurface>,
         settings: &Settings,
     ) -> Result<(Vec<PredictedFrame>, Timing)> {
         let started = Instant::now();
         let data = &self.trained.data;
         let (r, dim) = (data.resolution, data.condition_dim);
         let plane = r * r;
+        let mut targets = garment.targets.clone();
+        let (bases, inputs) = self.inputs_of(garment, &mut targets, seq, chunk)?;
         let device = Device::flex();
         let grid = time_grid(settings.steps, settings.shift);
         let targets_stats = &data.normalization.targets;
-        let conditions_stats = &data.normalization.conditions;
         let band = settings.guidance.band_m;
         let mut timing = Timing::default();
         let b = chunk.len();
-        let mut conditions = Vec::with_capacity(b * dim);
         let mut noise = Vec::with_capacity(b * 3 * plane);
         for &k in chunk {
-            let c = self
-                .layout
-                .vector(seq.motion, k, &seq.betas[k], &seq.material)?;
-            conditions.extend(
-                c.iter().enumerate().map(|(d, x)| {
-                    ((x - conditions_stats.mean[d]) / conditions_stats.std[d]) as f32
-                }),
-            );
             let step = match settings.noise {
                 Noise::Shared => 0,
                 Noise::PerFrame => k as u64 + 1,
@@ -382,22 +466,28 @@ impl<'a> Predictor<'a> {
             noise.extend((0..3 * plane).map(|_| normal(&mut rng)));
         }
         let posed = posed_bodies(self.body, seq, chunk)?;
-        let surfaces = posed
-            .iter()
-            .zip(chunk)
-            .map(|(vertices, k)| {
-                let v: Vec<sim::Vec3> = vertices.iter().map(|p| sim::Vec3::from(*p)).collect();
-                MeshSurface::new(&format!("body of frame {k}"), &v, self.body.faces())
-            })
-            .collect::<std::result::Result<Vec<_>, _>>()?;
+        for (i, (vertices, k)) in posed.iter().zip(chunk).enumerate() {
+            let v: Vec<sim::Vec3> = vertices.iter().map(|p| sim::Vec3::from(*p)).collect();
+            match surfaces.get_mut(i) {
+                Some(surface) => surface.update(&v, &vec![sim::Vec3::zeros(); v.len()]),
+                None => surfaces.push(MeshSurface::new(
+                    &format!("body of frame {k}"),
+                    &v,
+                    self.body.faces(),
+                )?),
+            }
+        }
+        let surfaces = &surfaces[..b];
         let repeat =
             |one: &[f32]| -> Vec<f32> { (0..b).flat_map(|_| one.iter().copied()).collect() };
         let tensor = |values: &[f32]| Tensor::<1>::from_floats(values, &device);
+        let texel_channels = self.trained.config.model.texel_channels();
         let field = Conditioned {
             model: &self.trained.model,
-            position: tensor(&repeat(&garment.position)).reshape([b, 3, r, r]),
+            position: tensor(&inputs.texels).reshape([b, texel_channels, r, r]),
             mask: tensor(&repeat(&garment.mask)).reshape([b, 1, r, r]),
-            conditions: tensor(&conditions).reshape([b, dim]),
+            conditions: tensor(&inputs.conditions).reshape([b, dim]),
+            zero_outside: self.trained.config.training.zero_outside,
         };
         let noise = tensor(&noise).reshape([b, 3, r, r]);
         timing.other_s += started.elapsed().as_secs_f64();
@@ -417,7 +507,7 @@ impl<'a> Predictor<'a> {
             for ((z, out), (base, surface)) in values
                 .chunks(3 * plane)
                 .zip(correction.chunks_mut(3 * plane))
-                .zip(bases.iter().zip(&surfaces))
+                .zip(bases.iter().zip(surfaces))
             {
                 let map = texels(z, &targets_stats.mean, &targets_stats.std);
                 let world = base.decode(&image.read(&map).ok()?);
@@ -445,7 +535,7 @@ impl<'a> Predictor<'a> {
         let finishing = Instant::now();
         let frames = values
             .chunks(3 * plane)
-            .zip(bases.iter().zip(&surfaces))
+            .zip(bases.iter().zip(surfaces))
             .zip(chunk.iter().zip(posed))
             .map(|((z, (base, surface)), (&index, body))| {
                 let map = texels(z, &targets_stats.mean, &targets_stats.std);

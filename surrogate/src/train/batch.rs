@@ -9,9 +9,9 @@ use burn::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::config::{TimeSampling, TrainConfig};
+use super::config::{Objective, TimeSampling, TrainConfig};
 use crate::data::{Frames, TrainingTensors};
-use crate::model::Prediction;
+use crate::model::{BODY_CHANNELS, DitConfig, Prediction};
 
 /// A generator for `purpose` at `step` of the run seeded by `seed`.
 pub fn generator(seed: u64, purpose: u64, step: u64) -> ChaCha8Rng {
@@ -33,13 +33,41 @@ pub fn normal(rng: &mut ChaCha8Rng) -> f32 {
     ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
 }
 
-/// A time in (0, 1).
+/// A time in (0, 1], always 1 for the regression objective.
 pub fn time(rng: &mut ChaCha8Rng, training: &TrainConfig) -> f32 {
+    if training.objective == Objective::Regression {
+        return 1.0;
+    }
     match training.time_sampling {
         TimeSampling::Uniform => rng.random::<f32>(),
         TimeSampling::LogitNormal => {
             let z = training.logit_mean + training.logit_std * f64::from(normal(rng));
             (1.0 / (1.0 + (-z).exp())) as f32
+        }
+    }
+}
+
+/// How a batch is made from frames: what the model takes and what it is trained towards.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Recipe {
+    /// Loss weight of inside texels relative to read-back-only ones.
+    pub inside_weight: f32,
+    /// What the network outputs.
+    pub prediction: Prediction,
+    /// Targets zeroed outside the loss mask before noising.
+    pub zero_outside: bool,
+    /// The texel inputs include the body channels.
+    pub body_inputs: bool,
+}
+
+impl Recipe {
+    /// The recipe of a model trained by `training`.
+    pub fn new(model: &DitConfig, training: &TrainConfig) -> Self {
+        Self {
+            inside_weight: training.inside_weight as f32,
+            prediction: model.prediction,
+            zero_outside: training.zero_outside,
+            body_inputs: model.body_inputs,
         }
     }
 }
@@ -51,7 +79,8 @@ pub struct Batch {
     pub size: usize,
     /// z_s = (1 - s) z0 + s eps, `[B, 3, R, R]`.
     pub noisy: Vec<f32>,
-    /// `[B, 3, R, R]`.
+    /// The texel inputs: position map, then the body inputs when the model takes them,
+    /// `[B, P, R, R]`.
     pub position: Vec<f32>,
     /// The loss masks, `[B, 1, R, R]`.
     pub mask: Vec<f32>,
@@ -72,10 +101,15 @@ impl Batch {
         split: &Frames,
         frames: &[usize],
         times: &[f32],
-        inside_weight: f32,
-        prediction: Prediction,
+        recipe: Recipe,
         rng: &mut ChaCha8Rng,
     ) -> Self {
+        let Recipe {
+            inside_weight,
+            prediction,
+            zero_outside,
+            body_inputs,
+        } = recipe;
         let r = tensors.resolution();
         let plane = r * r;
         let d = tensors.manifest.condition_dim;
@@ -87,7 +121,13 @@ impl Batch {
         for (&f, &s) in frames.iter().zip(times) {
             let g = split.template[f];
             let z0 = &split.targets[f * 3 * plane..(f + 1) * 3 * plane];
-            for &x in z0 {
+            let mask = &tensors.masks[g * plane..(g + 1) * plane];
+            for (k, &x) in z0.iter().enumerate() {
+                let x = if zero_outside && mask[k % plane] == 0.0 {
+                    0.0
+                } else {
+                    x
+                };
                 let eps = normal(rng);
                 b.noisy.push((1.0 - s) * x + s * eps);
                 b.target.push(match prediction {
@@ -97,7 +137,11 @@ impl Batch {
             }
             b.position
                 .extend_from_slice(&tensors.position_maps[g * 3 * plane..(g + 1) * 3 * plane]);
-            let mask = &tensors.masks[g * plane..(g + 1) * plane];
+            if body_inputs {
+                let n = BODY_CHANNELS * plane;
+                b.position
+                    .extend_from_slice(&split.bodies[f * n..(f + 1) * n]);
+            }
             let inside = &tensors.inside[g * plane..(g + 1) * plane];
             b.mask.extend_from_slice(mask);
             b.weight.extend(
@@ -116,7 +160,7 @@ impl Batch {
         tensors: &TrainingTensors,
         split: &Frames,
         training: &TrainConfig,
-        prediction: Prediction,
+        recipe: Recipe,
         step: usize,
     ) -> Self {
         let mut rng = generator(training.seed, TRAIN_STREAM, step as u64);
@@ -126,15 +170,7 @@ impl Batch {
         let times: Vec<f32> = (0..training.batch)
             .map(|_| time(&mut rng, training))
             .collect();
-        Self::new(
-            tensors,
-            split,
-            &frames,
-            &times,
-            training.inside_weight as f32,
-            prediction,
-            &mut rng,
-        )
+        Self::new(tensors, split, &frames, &times, recipe, &mut rng)
     }
 
     /// The model's inputs on `device`: noisy, position, mask, time, conditions.
@@ -150,7 +186,7 @@ impl Batch {
         };
         (
             t4(&self.noisy, 3),
-            t4(&self.position, 3),
+            t4(&self.position, self.position.len() / (b * plane).max(1)),
             t4(&self.mask, 1),
             Tensor::<1>::from_data(TensorData::new(self.time.clone(), [b]), device),
             Tensor::<2>::from_data(TensorData::new(self.conditions.clone(), [b, d]), device),
@@ -174,12 +210,13 @@ impl Batch {
 }
 
 /// The fixed validation set: `count` frames evenly spaced over `split`, each at its own
-/// stratified time ((k + 0.5) / count) with noise from the validation stream.
+/// stratified time ((k + 0.5) / count; 1 for the regression objective) with noise from the
+/// validation stream.
 pub fn validation_batches(
     tensors: &TrainingTensors,
     split: &Frames,
     training: &TrainConfig,
-    prediction: Prediction,
+    recipe: Recipe,
 ) -> Vec<Batch> {
     let count = training.val_frames.min(split.len());
     if count == 0 {
@@ -187,22 +224,15 @@ pub fn validation_batches(
     }
     let frames: Vec<usize> = (0..count).map(|k| k * split.len() / count).collect();
     let times: Vec<f32> = (0..count)
-        .map(|k| (k as f32 + 0.5) / count as f32)
+        .map(|k| match training.objective {
+            Objective::Regression => 1.0,
+            Objective::Flow => (k as f32 + 0.5) / count as f32,
+        })
         .collect();
     let mut rng = generator(training.seed, VALIDATION_STREAM, 0);
     frames
         .chunks(training.batch)
         .zip(times.chunks(training.batch))
-        .map(|(f, t)| {
-            Batch::new(
-                tensors,
-                split,
-                f,
-                t,
-                training.inside_weight as f32,
-                prediction,
-                &mut rng,
-            )
-        })
+        .map(|(f, t)| Batch::new(tensors, split, f, t, recipe, &mut rng))
         .collect()
 }

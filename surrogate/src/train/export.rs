@@ -113,6 +113,8 @@ impl TrainedModel {
             ))
         } else if !data.normalization_fits() {
             Some("normalization statistics of the wrong length".into())
+        } else if m.body_inputs && !data.has_bodies() {
+            Some("the model takes body inputs and these tensors have none".into())
         } else {
             None
         };

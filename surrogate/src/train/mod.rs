@@ -21,15 +21,15 @@ use burn::optim::GradientsParams;
 use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
-pub use batch::{Batch, generator, normal, validation_batches};
+pub use batch::{Batch, Recipe, generator, normal, validation_batches};
 pub use checkpoint::{RunState, write_atomic};
-pub use config::{RunConfig, TimeSampling, TrainConfig};
+pub use config::{Objective, RunConfig, TimeSampling, TrainConfig};
 pub use export::{TENSORS_MANIFEST, TrainedModel, load_run, save_reference, save_weights};
 pub use optim::{clip_global_norm, ema_decay, update_ema};
 
 use crate::data::TrainingTensors;
 use crate::error::{Error, Result, file_error};
-use crate::model::{Dit, Prediction};
+use crate::model::Dit;
 
 /// One line of `log.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -205,6 +205,15 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         path: "the training configuration".into(),
         message,
     })?;
+    if config.model.body_inputs && !tensors.manifest.has_bodies() {
+        return Err(Error::Config {
+            path: "the training configuration".into(),
+            message: format!(
+                "model.body_inputs = true, but the tensors in {} have no body inputs (made with the displacement target, or before format 2): remake them or set it to false",
+                options.data.display()
+            ),
+        });
+    }
     let run = &options.out;
     let config_path = run.join("config.toml");
     if options.resume {
@@ -241,8 +250,8 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         Some(split) => tensors.frames(split)?,
         None => crate::data::Frames::default(),
     };
-    let prediction = config.model.prediction;
-    let val_batches = validation_batches(&tensors, &val_frames, t, prediction);
+    let recipe = Recipe::new(&config.model, t);
+    let val_batches = validation_batches(&tensors, &val_frames, t, recipe);
 
     let device = Device::flex().autodiff();
     device.seed(t.seed);
@@ -254,7 +263,10 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let (mut model, mut optim, mut ema, mut state) = match loaded {
         Some(l) => (l.model, l.optim, l.ema, l.state),
         None => {
-            let model = Dit::new(&config.model, &device);
+            let mut model = Dit::new(&config.model, &device);
+            if t.zero_init {
+                model = model.zero_output_layers();
+            }
             let ema = model.valid();
             let state = RunState {
                 step: 0,
@@ -281,7 +293,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let mut saved_at = state.step;
     while state.step < t.steps {
         let step = state.step;
-        let batch = Batch::training(&tensors, &train_frames, t, prediction, step);
+        let batch = Batch::training(&tensors, &train_frames, t, recipe, step);
         let (noisy, position, mask, time, conditions) = batch.inputs(&device);
         let loss = batch.loss(model.forward(noisy, position, mask, time, conditions));
         let loss_value = f64::from(loss.clone().into_scalar::<f32>());
@@ -349,7 +361,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
     }
     save_weights(&ema, &run.join("model.safetensors"))?;
-    let reference = reference_batch(&tensors, &train_frames, &val_frames, t, prediction);
+    let reference = reference_batch(&tensors, &train_frames, &val_frames, t, recipe);
     save_reference(&ema, &reference, &run.join("reference.safetensors"))?;
     let summary = Summary {
         steps: state.step,
@@ -386,18 +398,10 @@ fn reference_batch(
     train: &crate::data::Frames,
     val: &crate::data::Frames,
     t: &TrainConfig,
-    prediction: Prediction,
+    recipe: Recipe,
 ) -> Batch {
     let split = if val.is_empty() { train } else { val };
     let frames = [0, split.len() - 1];
     let mut rng = generator(t.seed, 3, 0);
-    Batch::new(
-        tensors,
-        split,
-        &frames,
-        &[0.25, 0.75],
-        t.inside_weight as f32,
-        prediction,
-        &mut rng,
-    )
+    Batch::new(tensors, split, &frames, &[0.25, 0.75], recipe, &mut rng)
 }

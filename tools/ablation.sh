@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# The surrogate's ablation protocol (docs/SURROGATE.md, "The ablation"): one dataset
+# (specs/shipped.toml), one fresh held-out set (specs/heldout.toml), every arm trained the
+# same steps on one thread from the configuration in tools/ablation/ARM.toml, then scored by
+# `evaluate` on training sequences, test_garment, test_motion and the shipped `test` split
+# (unseen shape and material too), and on the held-out set's paper-like `test` split.
+#
+#   tools/ablation.sh tensors DATA OUT          # both tensor sets (zscore and bounded conditions)
+#   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
+#   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
+#   tools/ablation.sh baselines DATA HELDOUT OUT                # the no-learning rows, once
+#
+# Environment: DIT_GARMENT_BIN (default target/release/dit-garment), ABLATION_STEPS (720: about
+# 10 minutes of one core at batch 8), ABLATION_SEQUENCES (3 per shipped split).
+set -euo pipefail
+bin=${DIT_GARMENT_BIN:-target/release/dit-garment}
+steps=${ABLATION_STEPS:-720}
+per_split=${ABLATION_SEQUENCES:-3}
+here=$(cd "$(dirname "$0")" && pwd)
+
+tensors_of() {
+  case "$1" in
+    a0_* | a1_* | a2_*) echo zscore ;;
+    *) echo bounded ;;
+  esac
+}
+
+case "${1:-}" in
+  tensors)
+    data=$2 out=$3
+    for c in zscore bounded; do
+      [ -f "$out/tensors-$c/manifest.json" ] ||
+        "$bin" dataset tensors "$data" --out "$out/tensors-$c" --target lbs_residual --conditions "$c" --quiet
+    done
+    ;;
+  train)
+    arm=$2 out=$3
+    run="$out/runs/$arm"
+    resume=()
+    [ -f "$run/checkpoint.json" ] && resume=(--resume)
+    [ -f "$run/summary.json" ] && { echo "$arm: trained"; exit 0; }
+    "$bin" train --data "$out/tensors-$(tensors_of "$arm")" --out "$run" \
+      --config "$here/ablation/$arm.toml" --steps "$steps" --threads 1 --quiet "${resume[@]}"
+    ;;
+  evaluate)
+    arm=$2 data=$3 heldout=$4 out=$5 threads=${6:-1}
+    mkdir -p "$out/eval"
+    "$bin" evaluate --model "$out/runs/$arm" --data "$data" --splits train,test_garment,test_motion,test \
+      --max-sequences "$per_split" --baselines "" --threads "$threads" --quiet \
+      --json "$out/eval/$arm-shipped.json" --report "$out/eval/$arm-shipped"
+    "$bin" evaluate --model "$out/runs/$arm" --data "$heldout" --splits test --baselines "" \
+      --threads "$threads" --quiet --json "$out/eval/$arm-heldout.json" --report "$out/eval/$arm-heldout"
+    ;;
+  baselines)
+    data=$2 heldout=$3 out=$4
+    mkdir -p "$out/eval"
+    "$bin" evaluate --model none --data "$data" --splits train,test_garment,test_motion,test \
+      --max-sequences "$per_split" --baselines lbs,lbs_nearest,floor,rest --quiet \
+      --json "$out/eval/baselines-shipped.json" --report "$out/eval/baselines-shipped"
+    "$bin" evaluate --model none --data "$heldout" --splits test --baselines lbs,lbs_nearest,floor,rest \
+      --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
+    ;;
+  *)
+    sed -n '2,16p' "$0"
+    exit 2
+    ;;
+esac
