@@ -76,8 +76,9 @@ pub struct Recorded<'a> {
 #[derive(Debug, Default)]
 pub struct PredictionStats {
     pub finite: bool,
-    pub max_penetration_m: f64,
-    pub max_inside: usize,
+    /// Deepest vertex and most vertices inside the body of any frame, when tested.
+    pub max_penetration_m: Option<f64>,
+    pub max_inside: Option<usize>,
     pub pushed: usize,
     /// (E_c, E_c_vertex) of every 5th frame, %.
     pub collision: Vec<(f64, f64)>,
@@ -112,8 +113,11 @@ pub fn record_prediction(out: &Path, r: Recorded) -> Result<PredictionStats> {
             &mut |frame| {
                 let k = frame.index;
                 stats.finite &= frame.garment.iter().flatten().all(|v| v.is_finite());
-                stats.max_penetration_m = stats.max_penetration_m.max(frame.max_penetration_m);
-                stats.max_inside = stats.max_inside.max(frame.inside);
+                if let (Some(deepest), Some(n)) = (frame.max_penetration_m, frame.inside) {
+                    stats.max_penetration_m =
+                        Some(stats.max_penetration_m.unwrap_or(0.0).max(deepest));
+                    stats.max_inside = Some(stats.max_inside.unwrap_or(0).max(n));
+                }
                 stats.pushed += frame.pushed;
                 if k % FRAME_STRIDE == 0 {
                     let surface = BodySurface {

@@ -36,6 +36,9 @@ pub struct EvaluateArgs {
     /// Frames sampled together.
     #[arg(long, default_value_t = 16)]
     pub batch: usize,
+    /// Samples drawn per frame, each from its own noise, and averaged (1 to 64).
+    #[arg(long, default_value_t = 1)]
+    pub draws: usize,
     /// Baselines, comma-separated: lbs, lbs_nearest, floor, rest.
     #[arg(
         long,
@@ -120,6 +123,9 @@ pub struct PredictArgs {
     /// Frames sampled together.
     #[arg(long, default_value_t = 16)]
     pub batch: usize,
+    /// Samples drawn per frame, each from its own noise, and averaged (1 to 64).
+    #[arg(long, default_value_t = 1)]
+    pub draws: usize,
     /// Draw the initial noise per frame (default: one noise for the whole sequence, which
     /// keeps frames coherent).
     #[arg(long)]

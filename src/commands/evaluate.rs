@@ -155,6 +155,10 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         },
         seed: args.seed,
         batch: args.batch,
+        draws: args.draws,
+        // The scores come from the predicted vertices; the sampler's own inside test would
+        // only cost time.
+        inside_test: false,
         ..Settings::default()
     };
     if let Err(e) = settings.validate() {
@@ -242,7 +246,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     });
     let fingerprint = json!({
         "model": identity, "steps": settings.steps, "guidance": settings.guidance,
-        "seed": settings.seed, "batch": settings.batch,
+        "seed": settings.seed, "batch": settings.batch, "draws": settings.draws,
         "baselines": baselines.iter().map(|(m, _)| m.name()).collect::<Vec<_>>(),
         "floor": {"resolution": floor.resolution, "target": floor.target.name()},
         "body_model": body.name(), "threads": rayon::current_num_threads(),
@@ -301,7 +305,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let settings_json = json!({
         "steps": settings.steps, "guidance": settings.guidance.weight,
         "guidance_start": settings.guidance.start, "seed": settings.seed,
-        "batch": settings.batch, "threads": rayon::current_num_threads(),
+        "batch": settings.batch, "draws": settings.draws, "threads": rayon::current_num_threads(),
         "splits": args.splits, "max_sequences": args.max_sequences,
         "data": args.data, "protocol": "motion frames (after blend-in and settle); every 5th scored, averaged over frames then sequences; jitter over all motion frames",
     });

@@ -43,7 +43,9 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         } else {
             Noise::Shared
         },
+        draws: args.draws,
         resolve_penetration: args.resolve_penetration,
+        inside_test: true,
     };
     if let Err(e) = settings.validate() {
         bail!("bad sampler settings: {e}");
@@ -107,6 +109,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
                 "frames": frames, "finite": finite, "frames_per_s": frames_per_s,
                 "wall_s": wall_s, "steps": settings.steps, "guidance": settings.guidance.weight,
                 "guidance_start": settings.guidance.start, "batch": settings.batch,
+                "draws": settings.draws,
                 "E_c_percent": e_c, "E_c_vertex_percent": e_c_vertex,
                 "frames_scored": collision.len(),
                 "max_penetration_m": max_penetration, "max_verts_inside": max_inside,
@@ -138,7 +141,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     println!(
         "  E_c {:.2}% of surface samples inside the body, max penetration {:.1} mm{}; wrote {}",
         e_c,
-        max_penetration * 1e3,
+        max_penetration.unwrap_or(f64::NAN) * 1e3,
         if settings.resolve_penetration {
             format!(", {pushed} vertices pushed out after sampling")
         } else {

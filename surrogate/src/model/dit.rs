@@ -318,4 +318,26 @@ mod tests {
             .fold(0.0, f32::max);
         assert!(worst < 1e-4, "largest difference {worst}");
     }
+
+    /// Zeroed output layers give a zero output, and the final layer still gets a gradient
+    /// (so training moves it on the first step).
+    #[test]
+    fn zeroed_output_layers_start_at_zero_and_still_learn() {
+        let device = Device::flex().autodiff();
+        let _random = crate::seeded(&device, 3);
+        let model = Dit::new(&tiny(), &device).zero_output_layers();
+        let (x, pos, mask, s, c) = inputs(2, &device);
+        let out = model.forward(x, pos, mask, s, c);
+        let values: Vec<f32> = out.clone().try_into_vec_as().unwrap();
+        assert!(values.iter().all(|&v| v == 0.0));
+        let grads = (out.sum() + 1.0).square().backward();
+        let g = model
+            .final_linear
+            .weight
+            .val()
+            .grad(&grads)
+            .expect("a gradient");
+        let g: Vec<f32> = g.try_into_vec_as().unwrap();
+        assert!(g.iter().any(|&v| v != 0.0));
+    }
 }

@@ -34,6 +34,8 @@ pub const DEFAULT_STEPS: usize = 4;
 
 /// The random stream of the sampler's initial noise.
 pub const NOISE_STREAM: u64 = 3;
+/// Draw d > 0 of a K-draw mean takes its noise from stream `EXTRA_DRAW_STREAMS + d`.
+pub const EXTRA_DRAW_STREAMS: u64 = 100;
 
 /// Where the frames' initial noise comes from.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -61,9 +63,15 @@ pub struct Settings {
     pub batch: usize,
     /// Shared or per-frame initial noise.
     pub noise: Noise,
+    /// Samples drawn per frame (each from its own noise) and averaged: the mean of K draws
+    /// approaches the conditional mean, which is what minimizes E_v.
+    pub draws: usize,
     /// Push the vertices still inside the body out after sampling (off by default; its
     /// effect is reported apart from the model's).
     pub resolve_penetration: bool,
+    /// Test every predicted vertex against the body after sampling (the frames' `inside` and
+    /// `max_penetration_m`); off, an unguided prediction never builds a body surface.
+    pub inside_test: bool,
 }
 
 impl Default for Settings {
@@ -75,7 +83,9 @@ impl Default for Settings {
             seed: 0,
             batch: 16,
             noise: Noise::Shared,
+            draws: 1,
             resolve_penetration: false,
+            inside_test: true,
         }
     }
 }
@@ -107,6 +117,9 @@ impl Settings {
         if !(self.shift.is_finite() && self.shift > 0.0 && self.shift <= 100.0) {
             return Err(format!("shift = {} (a number in (0, 100])", self.shift));
         }
+        if !(1..=64).contains(&self.draws) {
+            return Err(format!("draws = {} (1 to 64)", self.draws));
+        }
         if !(1..=4096).contains(&self.batch) {
             return Err(format!("batch = {} (1 to 4096 frames)", self.batch));
         }
@@ -135,10 +148,10 @@ pub struct PredictedFrame {
     pub garment: Vec<[f64; 3]>,
     /// Posed body vertices, m.
     pub body: Vec<[f64; 3]>,
-    /// Vertices inside the body as sampled (before any push-out).
-    pub inside: usize,
-    /// Deepest vertex inside the body as sampled, m.
-    pub max_penetration_m: f64,
+    /// Vertices inside the body as sampled (before any push-out), when tested.
+    pub inside: Option<usize>,
+    /// Deepest vertex inside the body as sampled, m, when tested.
+    pub max_penetration_m: Option<f64>,
     /// Vertices the push-out moved.
     pub pushed: usize,
 }
@@ -456,17 +469,33 @@ impl<'a> Predictor<'a> {
         let band = settings.guidance.band_m;
         let mut timing = Timing::default();
         let b = chunk.len();
-        let mut noise = Vec::with_capacity(b * 3 * plane);
-        for &k in chunk {
-            let step = match settings.noise {
-                Noise::Shared => 0,
-                Noise::PerFrame => k as u64 + 1,
+        // Draw d's initial noise (draw 0 keeps the stream single-draw runs always used).
+        let noise_of = |d: usize| -> Vec<f32> {
+            let stream = if d == 0 {
+                NOISE_STREAM
+            } else {
+                EXTRA_DRAW_STREAMS + d as u64
             };
-            let mut rng = generator(settings.seed, NOISE_STREAM, step);
-            noise.extend((0..3 * plane).map(|_| normal(&mut rng)));
-        }
+            let mut noise = Vec::with_capacity(b * 3 * plane);
+            for &k in chunk {
+                let step = match settings.noise {
+                    Noise::Shared => 0,
+                    Noise::PerFrame => k as u64 + 1,
+                };
+                let mut rng = generator(settings.seed, stream, step);
+                noise.extend((0..3 * plane).map(|_| normal(&mut rng)));
+            }
+            noise
+        };
         let posed = posed_bodies(self.body, seq, chunk)?;
-        for (i, (vertices, k)) in posed.iter().zip(chunk).enumerate() {
+        let tests_after = settings.inside_test || settings.resolve_penetration;
+        let guided = (0..settings.steps).any(|k| settings.guidance.guides(k, settings.steps));
+        let surfaced = if tests_after || guided {
+            posed.len()
+        } else {
+            0
+        };
+        for (i, (vertices, k)) in posed.iter().zip(chunk).enumerate().take(surfaced) {
             let v: Vec<sim::Vec3> = vertices.iter().map(|p| sim::Vec3::from(*p)).collect();
             match surfaces.get_mut(i) {
                 Some(surface) => surface.update(&v, &vec![sim::Vec3::zeros(); v.len()]),
@@ -477,7 +506,7 @@ impl<'a> Predictor<'a> {
                 )?),
             }
         }
-        let surfaces = &surfaces[..b];
+        let surfaces = &surfaces[..surfaced];
         let repeat =
             |one: &[f32]| -> Vec<f32> { (0..b).flat_map(|_| one.iter().copied()).collect() };
         let tensor = |values: &[f32]| Tensor::<1>::from_floats(values, &device);
@@ -489,64 +518,73 @@ impl<'a> Predictor<'a> {
             conditions: tensor(&inputs.conditions).reshape([b, dim]),
             zero_outside: self.trained.config.training.zero_outside,
         };
-        let noise = tensor(&noise).reshape([b, 3, r, r]);
         timing.other_s += started.elapsed().as_secs_f64();
 
         let sampling = Instant::now();
         let image = &garment.image;
         let spread = &garment.spread;
-        let x = euler(&field, noise, &grid, &mut |k, s, x0_hat| {
-            if !settings.guidance.guides(k, settings.steps) {
-                return None;
-            }
-            let t = Instant::now();
-            let ds = s - grid[k + 1];
-            let scale = settings.guidance.weight.min(1.0 / ds);
-            let values: Vec<f32> = x0_hat.clone().try_into_vec_as().ok()?;
-            let mut correction = vec![0.0f32; values.len()];
-            for ((z, out), (base, surface)) in values
-                .chunks(3 * plane)
-                .zip(correction.chunks_mut(3 * plane))
-                .zip(bases.iter().zip(surfaces))
-            {
-                let map = texels(z, &targets_stats.mean, &targets_stats.std);
-                let world = base.decode(&image.read(&map).ok()?);
-                let gradient: Vec<[f64; 3]> =
-                    penalty_gradient(&clearances(surface, &world, band), band)
-                        .into_iter()
-                        .map(|g| base.gradient_to_target(g))
-                        .collect();
-                let spread_image = image.read_transpose(&gradient).ok()?;
-                for (c, out) in out.chunks_mut(plane).enumerate() {
-                    let factor = scale / targets_stats.std[c];
-                    for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
-                        *o = (factor * g[c] * w) as f32;
+        let mut values = vec![0.0f32; b * 3 * plane];
+        for d in 0..settings.draws {
+            let noise = tensor(&noise_of(d)).reshape([b, 3, r, r]);
+            let x = euler(&field, noise, &grid, &mut |k, s, x0_hat| {
+                if !settings.guidance.guides(k, settings.steps) {
+                    return None;
+                }
+                let t = Instant::now();
+                let ds = s - grid[k + 1];
+                let scale = settings.guidance.weight.min(1.0 / ds);
+                let values: Vec<f32> = x0_hat.clone().try_into_vec_as().ok()?;
+                let mut correction = vec![0.0f32; values.len()];
+                for ((z, out), (base, surface)) in values
+                    .chunks(3 * plane)
+                    .zip(correction.chunks_mut(3 * plane))
+                    .zip(bases.iter().zip(surfaces))
+                {
+                    let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                    let world = base.decode(&image.read(&map).ok()?);
+                    let gradient: Vec<[f64; 3]> =
+                        penalty_gradient(&clearances(surface, &world, band), band)
+                            .into_iter()
+                            .map(|g| base.gradient_to_target(g))
+                            .collect();
+                    let spread_image = image.read_transpose(&gradient).ok()?;
+                    for (c, out) in out.chunks_mut(plane).enumerate() {
+                        let factor = scale / targets_stats.std[c];
+                        for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
+                            *o = (factor * g[c] * w) as f32;
+                        }
                     }
                 }
+                timing.guidance_s += t.elapsed().as_secs_f64();
+                Some(tensor(&correction).reshape([b, 3, r, r]))
+            });
+            let draw: Vec<f32> = x
+                .try_into_vec_as()
+                .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))?;
+            for (v, x) in values.iter_mut().zip(draw) {
+                *v += x / settings.draws as f32;
             }
-            timing.guidance_s += t.elapsed().as_secs_f64();
-            Some(tensor(&correction).reshape([b, 3, r, r]))
-        });
-        let values: Vec<f32> = x
-            .try_into_vec_as()
-            .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))?;
+        }
         timing.network_s += sampling.elapsed().as_secs_f64() - timing.guidance_s;
 
         let finishing = Instant::now();
         let frames = values
             .chunks(3 * plane)
-            .zip(bases.iter().zip(surfaces))
+            .zip(&bases)
             .zip(chunk.iter().zip(posed))
-            .map(|((z, (base, surface)), (&index, body))| {
+            .enumerate()
+            .map(|(i, ((z, base), (&index, body)))| {
                 let map = texels(z, &targets_stats.mean, &targets_stats.std);
                 let mut world = base.decode(&image.read(&map)?);
-                let c = clearances(surface, &world, band);
-                let (inside, max_penetration_m) = penetration(&c);
-                let pushed = if settings.resolve_penetration {
-                    push_out(&mut world, &c, band)
-                } else {
-                    0
-                };
+                let (mut inside, mut max_penetration_m, mut pushed) = (None, None, 0);
+                if tests_after {
+                    let c = clearances(&surfaces[i], &world, band);
+                    let (n, deepest) = penetration(&c);
+                    (inside, max_penetration_m) = (Some(n), Some(deepest));
+                    if settings.resolve_penetration {
+                        pushed = push_out(&mut world, &c, band);
+                    }
+                }
                 Ok(PredictedFrame {
                     index,
                     garment: world,
