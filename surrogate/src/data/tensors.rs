@@ -287,6 +287,19 @@ fn stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
     Stats { mean, std }
 }
 
+/// Statistics of the body inputs: per channel for the skinned template; one scale for the
+/// three channels of its change, mean 0 (their root mean square), so a motion sideways that
+/// training rarely saw does not arrive at tens of standard deviations of the sideways channel.
+fn body_stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
+    let mut s = stats(sum, sum2, count);
+    let rms = (sum2[3..6].iter().sum::<f64>() / (3.0 * count.max(1.0))).sqrt();
+    for c in 3..6 {
+        s.mean[c] = 0.0;
+        s.std[c] = if rms > 1e-12 { rms } else { 1.0 };
+    }
+    s
+}
+
 /// The dataset's finished sequences, each read once: checked against its manifest checksum,
 /// then parsed.
 fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
@@ -613,7 +626,7 @@ pub fn write_tensors(
             targets: stats(&t_sum, &t_sum2, t_count),
             conditions: layout.statistics(&c_sum, &c_sum2, c_count),
             position_maps: stats(&p_sum, &p_sum2, p_count),
-            bodies: with_bodies.then(|| stats(&b_sum, &b_sum2, t_count)),
+            bodies: with_bodies.then(|| body_stats(&b_sum, &b_sum2, t_count)),
         },
     };
     let json = serde_json::to_vec_pretty(&manifest).map_err(|e| file_error(out, e))?;
