@@ -25,9 +25,9 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run the main job on built-in defaults: the default garment on the default body through
-    /// the built-in `walk` motion, simulated by the engine and predicted by the shipped
-    /// surrogate, compared (MCAP recordings, OBJ frames, pictures, a viewer page, a JSON
+    /// Run the main job on built-in defaults: a held-out library t-shirt (`vneck_tee`, a design
+    /// the shipped surrogate never saw) on the default body through the built-in `walk`
+    /// motion, simulated by the engine and predicted by the shipped surrogate, compared (MCAP recordings, OBJ frames, pictures, a viewer page, a JSON
     /// summary).
     Demo(DemoArgs),
     /// Simulate a garment on a body through a motion and record the sequence as MCAP.
