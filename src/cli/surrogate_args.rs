@@ -30,6 +30,10 @@ pub struct EvaluateArgs {
     /// regression model, 0.5 for a flow model).
     #[arg(long, allow_hyphen_values = true)]
     pub guidance_start: Option<f64>,
+    /// Guidance passes on the finished sample, without the network (default: the model's, 2
+    /// for a regression model, 0 for a flow model).
+    #[arg(long)]
+    pub guidance_refine: Option<usize>,
     /// Seed of the sampler's noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -117,6 +121,10 @@ pub struct PredictArgs {
     /// regression model, 0.5 for a flow model).
     #[arg(long, allow_hyphen_values = true)]
     pub guidance_start: Option<f64>,
+    /// Guidance passes on the finished sample, without the network (default: the model's, 2
+    /// for a regression model, 0 for a flow model).
+    #[arg(long)]
+    pub guidance_refine: Option<usize>,
     /// Seed of the initial noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,

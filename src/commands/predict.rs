@@ -34,6 +34,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         guidance: Guidance {
             weight: args.guidance,
             start: args.guidance_start.unwrap_or(defaults.guidance.start),
+            refine: args.guidance_refine.unwrap_or(defaults.guidance.refine),
             ..Guidance::default()
         },
         seed: args.seed,

@@ -26,6 +26,10 @@ pub struct Guidance {
     pub start: f64,
     /// Band above the body surface that guidance keeps clear, m.
     pub band_m: f64,
+    /// Guidance passes on the finished sample (no network call): each moves the vertices in
+    /// the band onto its edge as far as the texels carry them (0 for runs before the key).
+    #[serde(default)]
+    pub refine: usize,
 }
 
 impl Default for Guidance {
@@ -34,6 +38,7 @@ impl Default for Guidance {
             weight: 5.0,
             start: 0.5,
             band_m: CONTACT_BAND_M,
+            refine: 0,
         }
     }
 }
@@ -52,6 +57,9 @@ impl Guidance {
                 "guidance start = {} (a fraction of the steps in [0, 1])",
                 self.start
             ));
+        }
+        if self.refine > 16 {
+            return Err(format!("guidance refine = {} (0 to 16 passes)", self.refine));
         }
         if !(self.band_m.is_finite() && (0.0..=0.1).contains(&self.band_m)) {
             return Err(format!("guidance band = {} m (0 to 0.1 m)", self.band_m));

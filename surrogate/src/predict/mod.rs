@@ -32,6 +32,9 @@ use crate::train::{Objective, TrainedModel, generator, normal};
 /// Euler steps by default (chosen from the steps sweep in docs/SURROGATE.md).
 pub const DEFAULT_STEPS: usize = 4;
 
+/// Guidance passes after a regression model's one step (measured: docs/SURROGATE.md).
+pub const REGRESSION_REFINE: usize = 2;
+
 /// The random stream of the sampler's initial noise.
 pub const NOISE_STREAM: u64 = 3;
 /// Draw d > 0 of a K-draw mean takes its noise from stream `EXTRA_DRAW_STREAMS + d`.
@@ -92,7 +95,7 @@ impl Default for Settings {
 
 impl Settings {
     /// The defaults for `trained`: a regression model (trained at s = 1 only) is sampled in
-    /// one step, guided on that step; a flow model in [`DEFAULT_STEPS`], guided over the
+    /// one step, guided on that step and refined by [`REGRESSION_REFINE`] guidance passes; a flow model in [`DEFAULT_STEPS`], guided over the
     /// second half (docs/SURROGATE.md, the model card).
     pub fn for_model(trained: &TrainedModel) -> Self {
         let defaults = Self::default();
@@ -101,6 +104,7 @@ impl Settings {
                 steps: 1,
                 guidance: Guidance {
                     start: 0.0,
+                    refine: REGRESSION_REFINE,
                     ..defaults.guidance
                 },
                 ..defaults
@@ -489,7 +493,8 @@ impl<'a> Predictor<'a> {
         };
         let posed = posed_bodies(self.body, seq, chunk)?;
         let tests_after = settings.inside_test || settings.resolve_penetration;
-        let guided = (0..settings.steps).any(|k| settings.guidance.guides(k, settings.steps));
+        let guided = (0..settings.steps).any(|k| settings.guidance.guides(k, settings.steps))
+            || (settings.guidance.weight > 0.0 && settings.guidance.refine > 0);
         let surfaced = if tests_after || guided {
             posed.len()
         } else {
@@ -523,6 +528,32 @@ impl<'a> Predictor<'a> {
         let sampling = Instant::now();
         let image = &garment.image;
         let spread = &garment.spread;
+        // The guidance term of normalized maps `values` at `scale`: the penalty's gradient of
+        // each frame, spread to its texels and divided by the targets' std.
+        let correction_of = |values: &[f32], scale: f64| -> Option<Vec<f32>> {
+            let mut correction = vec![0.0f32; values.len()];
+            for ((z, out), (base, surface)) in values
+                .chunks(3 * plane)
+                .zip(correction.chunks_mut(3 * plane))
+                .zip(bases.iter().zip(surfaces))
+            {
+                let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                let world = base.decode(&image.read(&map).ok()?);
+                let gradient: Vec<[f64; 3]> =
+                    penalty_gradient(&clearances(surface, &world, band), band)
+                        .into_iter()
+                        .map(|g| base.gradient_to_target(g))
+                        .collect();
+                let spread_image = image.read_transpose(&gradient).ok()?;
+                for (c, out) in out.chunks_mut(plane).enumerate() {
+                    let factor = scale / targets_stats.std[c];
+                    for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
+                        *o = (factor * g[c] * w) as f32;
+                    }
+                }
+            }
+            Some(correction)
+        };
         let mut values = vec![0.0f32; b * 3 * plane];
         for d in 0..settings.draws {
             let noise = tensor(&noise_of(d)).reshape([b, 3, r, r]);
@@ -534,27 +565,7 @@ impl<'a> Predictor<'a> {
                 let ds = s - grid[k + 1];
                 let scale = settings.guidance.weight.min(1.0 / ds);
                 let values: Vec<f32> = x0_hat.clone().try_into_vec_as().ok()?;
-                let mut correction = vec![0.0f32; values.len()];
-                for ((z, out), (base, surface)) in values
-                    .chunks(3 * plane)
-                    .zip(correction.chunks_mut(3 * plane))
-                    .zip(bases.iter().zip(surfaces))
-                {
-                    let map = texels(z, &targets_stats.mean, &targets_stats.std);
-                    let world = base.decode(&image.read(&map).ok()?);
-                    let gradient: Vec<[f64; 3]> =
-                        penalty_gradient(&clearances(surface, &world, band), band)
-                            .into_iter()
-                            .map(|g| base.gradient_to_target(g))
-                            .collect();
-                    let spread_image = image.read_transpose(&gradient).ok()?;
-                    for (c, out) in out.chunks_mut(plane).enumerate() {
-                        let factor = scale / targets_stats.std[c];
-                        for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
-                            *o = (factor * g[c] * w) as f32;
-                        }
-                    }
-                }
+                let correction = correction_of(&values, scale)?;
                 timing.guidance_s += t.elapsed().as_secs_f64();
                 Some(tensor(&correction).reshape([b, 3, r, r]))
             });
@@ -563,6 +574,17 @@ impl<'a> Predictor<'a> {
                 .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))?;
             for (v, x) in values.iter_mut().zip(draw) {
                 *v += x / settings.draws as f32;
+            }
+        }
+        // Refinement passes on the sample itself: each moves every vertex in the band by its
+        // depth below the band's edge, as far as the texels carry it.
+        if settings.guidance.weight > 0.0 {
+            for _ in 0..settings.guidance.refine {
+                let t = Instant::now();
+                if let Some(correction) = correction_of(&values, 1.0) {
+                    values.iter_mut().zip(correction).for_each(|(v, c)| *v -= c);
+                }
+                timing.guidance_s += t.elapsed().as_secs_f64();
             }
         }
         timing.network_s += sampling.elapsed().as_secs_f64() - timing.guidance_s;
