@@ -59,7 +59,10 @@ impl Guidance {
             ));
         }
         if self.refine > 16 {
-            return Err(format!("guidance refine = {} (0 to 16 passes)", self.refine));
+            return Err(format!(
+                "guidance refine = {} (0 to 16 passes)",
+                self.refine
+            ));
         }
         if !(self.band_m.is_finite() && (0.0..=0.1).contains(&self.band_m)) {
             return Err(format!("guidance band = {} m (0 to 0.1 m)", self.band_m));
