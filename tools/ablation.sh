@@ -10,12 +10,13 @@
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #   tools/ablation.sh baselines DATA HELDOUT OUT                # the no-learning rows, once
 #
-# Environment: DIT_GARMENT_BIN (default target/release/dit-garment), ABLATION_STEPS (720: about
-# 10 minutes of one core at batch 8), ABLATION_SEQUENCES (3 per shipped split).
+# Environment: DIT_GARMENT_BIN (default target/release/dit-garment), ABLATION_STEPS (500, as
+# measured in docs/SURROGATE.md: 6-7 minutes of one core at batch 8), ABLATION_SEQUENCES (2
+# per shipped split, as measured).
 set -euo pipefail
 bin=${DIT_GARMENT_BIN:-target/release/dit-garment}
-steps=${ABLATION_STEPS:-720}
-per_split=${ABLATION_SEQUENCES:-3}
+steps=${ABLATION_STEPS:-500}
+per_split=${ABLATION_SEQUENCES:-2}
 here=$(cd "$(dirname "$0")" && pwd)
 
 tensors_of() {

@@ -11,7 +11,7 @@ from pathlib import Path
 
 SPLITS = [("shipped", "train"), ("shipped", "test_garment"), ("shipped", "test_motion"),
           ("shipped", "test"), ("heldout", "test")]
-NAMES = {("shipped", "train"): "train (3 seq.)", ("shipped", "test_garment"): "test_garment",
+NAMES = {("shipped", "train"): "train (2 seq.)", ("shipped", "test_garment"): "test_garment",
          ("shipped", "test_motion"): "test_motion",
          ("shipped", "test"): "test, unseen shape + material",
          ("heldout", "test"): "held-out test (paper's)"}
