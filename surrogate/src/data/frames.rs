@@ -111,7 +111,7 @@ fn indices(bytes: &[u8], bound: usize, name: &str, path: &Path) -> Result<Vec<us
 }
 
 /// `(x - mean_c) / std_c` over `[.., C, plane]` blocks.
-fn normalize_channels(values: &mut [f32], stats: &Stats, plane: usize) {
+pub(crate) fn normalize_channels(values: &mut [f32], stats: &Stats, plane: usize) {
     let channels = stats.mean.len();
     for (k, chunk) in values.chunks_mut(plane).enumerate() {
         let c = k % channels;

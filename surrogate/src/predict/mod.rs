@@ -23,7 +23,7 @@ use sim::Material;
 use sim::obstacles::MeshSurface;
 use sim::recording::TemplateArrays;
 
-use crate::data::{ConditionLayout, body_input_maps, channels_first};
+use crate::data::{ConditionLayout, body_input_maps, channels_first, normalize_channels};
 use crate::error::{Error, Result};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
 use crate::sample::{Conditioned, euler, time_grid};
@@ -301,15 +301,12 @@ impl<'a> Predictor<'a> {
             data.target,
             data.root,
         )?;
-        let stats = &data.normalization.position_maps;
-        let position = channels_first(&image.encode(&template.positions)?)
-            .chunks(image.resolution().pow(2))
-            .enumerate()
-            .flat_map(|(c, plane)| {
-                let (m, s) = (stats.mean[c] as f32, stats.std[c] as f32);
-                plane.iter().map(move |v| (v - m) / s).collect::<Vec<_>>()
-            })
-            .collect();
+        let mut position = channels_first(&image.encode(&template.positions)?);
+        normalize_channels(
+            &mut position,
+            &data.normalization.position_maps,
+            image.resolution().pow(2),
+        );
         let mask = image.loss_mask().iter().map(|&m| m as u8 as f32).collect();
         let weights = image.read_transpose(&vec![[1.0; 3]; image.vertices()])?;
         let spread = weights
@@ -430,13 +427,10 @@ impl<'a> Predictor<'a> {
                     )
                 })?;
                 let before = body_of(k.saturating_sub(1));
-                let maps = body_input_maps(targets, &garment.image, self.body, body_of(k), before)?;
-                inputs
-                    .texels
-                    .extend(maps.chunks(plane).enumerate().flat_map(|(c, p)| {
-                        let (m, s) = (bodies.mean[c] as f32, bodies.std[c] as f32);
-                        p.iter().map(move |v| (v - m) / s)
-                    }));
+                let mut maps =
+                    body_input_maps(targets, &garment.image, self.body, body_of(k), before)?;
+                normalize_channels(&mut maps, bodies, plane);
+                inputs.texels.extend(maps);
             }
             let c = self
                 .layout
