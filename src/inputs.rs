@@ -88,8 +88,8 @@ pub fn garment(
     source: &str,
     model: &BodyModel,
 ) -> Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
-    if let Some(design) = garments::library::find(source) {
-        return Ok((library_template(design, model)?, Vec::new()));
+    if let Some(design) = garments::library::resolve(source) {
+        return Ok((library_template(&design, model)?, Vec::new()));
     }
     let path = Path::new(source);
     if source.ends_with(".obj") || path.exists() {
@@ -100,8 +100,10 @@ pub fn garment(
     }
     if !garments::BUILTIN.contains(&source) {
         bail!(
-            "unknown garment '{source}': not a library design ({}), a built-in ({}) or a file",
+            "unknown garment '{source}': not a library design ({}) or a variant of one (name{}k, k in 1..={}), a built-in ({}) or a file",
             garments::library::design_names().join(", "),
+            garments::library::SEPARATOR,
+            garments::library::MAX_INDEX,
             garments::BUILTIN.join(", ")
         );
     }
@@ -122,13 +124,13 @@ pub fn cache_dir() -> std::path::PathBuf {
     base.join("dit-garment")
 }
 
-/// A library design's template on `model`, made (sewn and draped, about 5-20 s) on first use
+/// A library design's (or a variant's) template on `model`, made (sewn and draped, about 5-20 s) on first use
 /// and cached under [`cache_dir`], keyed by the pattern, the body, the sewing options, the
 /// software version and the engine revision.
 /// Refused when the design fails a quality gate. The cached OBJ is always what is returned (read
 /// back after making), so results do not depend on whether the cache was warm.
 pub fn library_template(
-    design: &garments::library::Design,
+    design: &garments::library::NamedDesign,
     model: &BodyModel,
 ) -> Result<garments::Garment> {
     use std::hash::{Hash, Hasher};

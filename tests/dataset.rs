@@ -381,6 +381,10 @@ fn bad_specs_get_errors_naming_the_key() {
             SMALL_SPEC.replace("source = \"walk\"", "source = \"moonwalk\""),
             "moonwalk",
         ),
+        (
+            SMALL_SPEC.replace("name = \"skirt\"", "name = \"skirt\"\nvariants = 2"),
+            "only a library design has variants",
+        ),
     ];
     for (text, key) in cases {
         // A folder that exists already (a user's, with a file of theirs) is left as it was.

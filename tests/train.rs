@@ -311,6 +311,42 @@ fn a_killed_run_resumes_to_the_uninterrupted_curve() {
 }
 
 #[test]
+fn a_finished_run_resumed_with_more_steps_continues_its_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = config();
+    let run = dir.path().join("run");
+    let run_s = run.to_str().unwrap();
+    ok(&train_args(run_s, &cfg, &["--steps", "20"]));
+    let first = log(&run);
+    let said = ok(&train_args(run_s, &cfg, &["--steps", "40", "--resume"]));
+    assert!(
+        said.contains("extending the run from 20 to 40 steps"),
+        "{said}"
+    );
+    let extended = log(&run);
+    // The first 20 steps are kept as they were; the run goes on to step 40.
+    assert_eq!(curve(&extended[..first.len()]), curve(&first));
+    assert_eq!(extended.last().unwrap()["step"], 40);
+    // From step 20 on, the learning rate is the 40-step schedule's (a 40-step run's).
+    let straight = dir.path().join("straight");
+    ok(&train_args(
+        straight.to_str().unwrap(),
+        &cfg,
+        &["--steps", "40"],
+    ));
+    let lr = |log: &[Value]| -> Vec<(Value, Value)> {
+        log.iter()
+            .filter(|l| l["step"].as_u64().unwrap() > 20)
+            .map(|l| (l["step"].clone(), l["lr"].clone()))
+            .collect()
+    };
+    assert!(!lr(&extended).is_empty());
+    assert_eq!(lr(&extended), lr(&log(&straight)));
+    let saved = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    assert!(saved.contains("steps = 40"), "{saved}");
+}
+
+#[test]
 fn bad_configurations_and_damaged_checkpoints_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = config();
@@ -331,8 +367,8 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
     ok(&train_args(run_s, &cfg, &["--steps", "20"]));
     let err = fails(&train_args(run_s, &cfg, &["--steps", "20"]));
     assert!(err.contains("already holds a training run"), "{err}");
-    let err = fails(&train_args(run_s, &cfg, &["--steps", "40", "--resume"]));
-    assert!(err.contains("training.steps = 40 here, 20 there"), "{err}");
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "10", "--resume"]));
+    assert!(err.contains("training.steps = 10 here, 20 there"), "{err}");
 
     // A checkpoint made for another model is refused, naming the file and the key.
     let pointer = json(&run.join("checkpoint.json"));

@@ -6,8 +6,11 @@
 # (unseen shape and material too), and on the held-out set's paper-like `test` split.
 #
 #   tools/ablation.sh tensors DATA OUT          # both tensor sets (zscore and bounded conditions)
+#   tools/ablation.sh tensors-designs DESIGNS OUT   # bounded tensors of specs/designs.toml's data (a5_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
+#     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
+#     shipped.toml's for every arm)
 #   tools/ablation.sh baselines DATA HELDOUT OUT                # the no-learning rows, once
 #
 # Environment: DIT_GARMENT_BIN (default target/release/dit-garment), ABLATION_STEPS (500, as
@@ -22,6 +25,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 tensors_of() {
   case "$1" in
     a0_* | a1_* | a2_*) echo zscore ;;
+    a5_*) echo designs ;;
     *) echo bounded ;;
   esac
 }
@@ -33,6 +37,11 @@ case "${1:-}" in
       [ -f "$out/tensors-$c/manifest.json" ] ||
         "$bin" dataset tensors "$data" --out "$out/tensors-$c" --target lbs_residual --conditions "$c" --quiet
     done
+    ;;
+  tensors-designs)
+    data=$2 out=$3
+    [ -f "$out/tensors-designs/manifest.json" ] ||
+      "$bin" dataset tensors "$data" --out "$out/tensors-designs" --target lbs_residual --conditions bounded --quiet
     ;;
   train)
     arm=$2 out=$3
@@ -62,7 +71,7 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,16p' "$0"
+    sed -n '2,19p' "$0"
     exit 2
     ;;
 esac

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use garments::Pattern;
-use garments::library::{DESIGNS, find};
+use garments::library::{DESIGNS, resolve};
 use motions::BodyModel;
 use serde::Serialize;
 
@@ -60,8 +60,10 @@ pub fn run(command: GarmentsCommand) -> Result<()> {
 
 fn unknown(name: &str) -> anyhow::Error {
     anyhow::anyhow!(
-        "unknown design '{name}' (designs: {})",
-        garments::library::design_names().join(", ")
+        "unknown design '{name}' (designs: {}; a variant: name{}k, k in 1..={})",
+        garments::library::design_names().join(", "),
+        garments::library::SEPARATOR,
+        garments::library::MAX_INDEX
     )
 }
 
@@ -104,14 +106,20 @@ fn list(json: Option<&Path>) -> Result<()> {
 }
 
 fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
-    let design = find(name).ok_or_else(|| unknown(name))?;
+    let design = resolve(name).ok_or_else(|| unknown(name))?;
     let pattern = design.pattern()?;
-    say!(
-        "{}: {} ({} split)",
-        design.name,
-        design.description,
-        design.split
-    );
+    let base = design.base;
+    if design.index == 0 {
+        say!("{}: {} ({} split)", base.name, base.description, base.split);
+    } else {
+        say!(
+            "{}: variant {} of {} ({})",
+            design.name,
+            design.index,
+            base.name,
+            base.description
+        );
+    }
     say!(
         "parameters (cm): {}",
         serde_json::to_string(&design.params).unwrap_or_default()
@@ -146,7 +154,7 @@ fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
 
 /// A design or a pattern file.
 pub fn load_pattern(source: &str) -> Result<Pattern> {
-    if let Some(d) = find(source) {
+    if let Some(d) = resolve(source) {
         return Ok(d.pattern()?);
     }
     let path = Path::new(source);

@@ -69,14 +69,21 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         Event::Started {
             step,
             steps,
+            extended_from,
             parameters,
             train_frames,
             val_frames,
             val_split,
         } => {
+            bar.set_length(steps as u64);
             bar.set_position(step as u64);
             bar.reset_eta();
             bar.suspend(|| {
+                if let Some(before) = extended_from {
+                    println!(
+                        "extending the run from {before} to {steps} steps: the learning rate from step {step} on follows the {steps}-step schedule"
+                    );
+                }
                 println!(
                     "training {parameters} parameters on {train_frames} frames ({val_frames} of {} for validation), steps {step}..{steps}",
                     val_split.as_deref().unwrap_or("no held-out split")

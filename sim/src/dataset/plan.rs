@@ -167,14 +167,19 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             &format!("must hold at most {MAX_PLANNED_SEQUENCES} sequences"),
         ));
     }
-    let pick = |list: Vec<&String>, rng: &mut ChaCha8Rng| -> String {
+    let pick = |list: &[&String], rng: &mut ChaCha8Rng| -> String {
         list[rng.random_range(0..list.len())].clone()
     };
+    let garment_names: Vec<(String, Tag)> = spec
+        .garments
+        .iter()
+        .flat_map(|g| g.names().map(move |name| (name, g.split)))
+        .collect();
     let garments_tagged = |tag: Tag| -> Vec<&String> {
-        spec.garments
+        garment_names
             .iter()
-            .filter(|g| g.split == tag)
-            .map(|g| &g.name)
+            .filter(|g| g.1 == tag)
+            .map(|g| &g.0)
             .collect()
     };
     let motions_tagged = |tag: Tag| -> Vec<&String> {
@@ -209,7 +214,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             for draw in 0..s.draws_per_shape {
                 let key = format!("{shape_key}/draw{draw}");
                 let mut r = rng(spec.seed, &key);
-                let garment = pick(garments_tagged(Tag::Train), &mut r);
+                let garment = pick(&garments_tagged(Tag::Train), &mut r);
                 let m = material(&mut r, &spec.material);
                 let name = format!("{}-s{shape}d{draw}", slug(motion));
                 out.push(sequence(
@@ -264,8 +269,8 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
         for i in 0..count {
             let key = format!("{split}/{i}");
             let mut r = rng(spec.seed, &key);
-            let garment = pick(garments_tagged(garment_tag), &mut r);
-            let motion = pick(motions_tagged(motion_tag), &mut r);
+            let garment = pick(&garments_tagged(garment_tag), &mut r);
+            let motion = pick(&motions_tagged(motion_tag), &mut r);
             let b = betas(
                 &mut r,
                 s.betas,
@@ -295,6 +300,7 @@ mod tests {
         let g = |name: &str, split| GarmentEntry {
             name: name.into(),
             split,
+            variants: 0,
         };
         let m = |source: &str, split| MotionEntry {
             source: source.into(),
@@ -365,6 +371,24 @@ mod tests {
         let b = plan(&more, &expand_motions(&more).unwrap()).unwrap();
         for p in a.iter().filter(|p| p.split == "train") {
             assert!(b.contains(p), "{} changed", p.id);
+        }
+    }
+
+    #[test]
+    fn garment_variants_are_drawn_with_their_entry_split() {
+        let mut spec = spec();
+        spec.garments[0].variants = 3;
+        let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
+        let train: std::collections::BTreeSet<&str> = planned
+            .iter()
+            .filter(|p| p.split == "train")
+            .map(|p| p.garment.as_str())
+            .collect();
+        assert!(train.iter().any(|g| g.starts_with("a~")), "{train:?}");
+        let allowed = ["a", "a~1", "a~2", "a~3", "b"];
+        assert!(train.iter().all(|g| allowed.contains(g)), "{train:?}");
+        for p in planned.iter().filter(|p| p.split == "test") {
+            assert_eq!(p.garment, "c");
         }
     }
 

@@ -197,6 +197,24 @@ pub struct GarmentEntry {
     pub name: String,
     /// Split tag.
     pub split: Tag,
+    /// Variants of a library design joined to the list (`name~1` ..= `name~N`, each its own
+    /// design with this split: `garments::library::resolve`); 0, the design alone.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub variants: u32,
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
+}
+
+impl GarmentEntry {
+    /// The garment's names: the entry's, then its variants'.
+    pub fn names(&self) -> impl Iterator<Item = String> + '_ {
+        std::iter::once(self.name.clone()).chain(
+            (1..=self.variants)
+                .map(|k| format!("{}{}{k}", self.name, garments::library::SEPARATOR)),
+        )
+    }
 }
 
 /// A motion source of the dataset.
@@ -382,6 +400,25 @@ impl DatasetSpec {
         ] {
             if !(x.is_finite() && x > 0.0) {
                 return Err(format!("{key} = {x} must be a positive number"));
+            }
+        }
+        for g in &self.garments {
+            if g.variants == 0 {
+                continue;
+            }
+            if garments::library::find(&g.name).is_none() {
+                return Err(format!(
+                    "garments: '{}' has variants = {}, but only a library design has variants",
+                    g.name, g.variants
+                ));
+            }
+            if g.variants > garments::library::MAX_INDEX {
+                return Err(format!(
+                    "garments: '{}' has variants = {} (at most {})",
+                    g.name,
+                    g.variants,
+                    garments::library::MAX_INDEX
+                ));
             }
         }
         let has = |tag: Tag| self.garments.iter().any(|e| e.split == tag);

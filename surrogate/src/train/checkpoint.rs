@@ -187,7 +187,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     let dir = run.join(&pointer.dir);
     let saved_path = dir.join("config.toml");
     let saved = RunConfig::load_saved(&saved_path)?;
-    if let Some(difference) = config.first_difference(&saved) {
+    if let Some(difference) = config.resume_difference(&saved) {
         return Err(file_error(
             &saved_path,
             format!(

@@ -284,6 +284,19 @@ impl RunConfig {
     }
 }
 
+impl RunConfig {
+    /// What keeps `self` from resuming the run saved as `saved`: every difference but a
+    /// larger `training.steps`, which extends the run (the learning rate's schedule from the
+    /// resumed step on is then the longer run's).
+    pub fn resume_difference(&self, saved: &Self) -> Option<String> {
+        let mut extended = saved.clone();
+        if self.training.steps > saved.training.steps {
+            extended.training.steps = self.training.steps;
+        }
+        self.first_difference(&extended)
+    }
+}
+
 fn read_text(path: &std::path::Path) -> Result<String> {
     Ok(files::read_to_string(
         path,
@@ -311,6 +324,22 @@ mod tests {
         assert_eq!(c.training, TrainConfig::default());
         let d = c.first_difference(&RunConfig::default()).unwrap();
         assert_eq!(d, "model.heads = 2 here, 4 there");
+    }
+
+    #[test]
+    fn resuming_may_extend_the_steps_and_change_nothing_else() {
+        let saved = RunConfig::default();
+        let mut longer = saved.clone();
+        longer.training.steps = saved.training.steps + 100;
+        assert_eq!(longer.resume_difference(&saved), None);
+        let mut shorter = saved.clone();
+        shorter.training.steps = saved.training.steps - 1;
+        let d = shorter.resume_difference(&saved).unwrap();
+        assert!(d.starts_with("training.steps"), "{d}");
+        let mut other = longer.clone();
+        other.training.lr *= 2.0;
+        let d = other.resume_difference(&saved).unwrap();
+        assert!(d.starts_with("training.lr"), "{d}");
     }
 
     /// A run saved before `model.prediction` existed is a velocity model; a saved file with

@@ -95,6 +95,9 @@ pub enum Event {
         step: usize,
         /// Steps of the run.
         steps: usize,
+        /// The run's steps before this resume extended them: the learning rate from `step` on
+        /// follows the `steps`-step schedule.
+        extended_from: Option<usize>,
         /// Trainable parameters.
         parameters: usize,
         /// Training frames.
@@ -216,10 +219,14 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     }
     let run = &options.out;
     let config_path = run.join("config.toml");
+    let mut extended_from = None;
     if options.resume {
         if config_path.exists() {
             let saved = RunConfig::load_saved(&config_path)?;
-            if let Some(d) = config.first_difference(&saved) {
+            if config.training.steps > saved.training.steps {
+                extended_from = Some(saved.training.steps);
+            }
+            if let Some(d) = config.resume_difference(&saved) {
                 return Err(file_error(
                     &config_path,
                     format!(
@@ -281,6 +288,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     progress(Event::Started {
         step: state.step,
         steps: t.steps,
+        extended_from,
         parameters,
         train_frames: train_frames.len(),
         val_frames: val_batches.iter().map(|b| b.size).sum(),

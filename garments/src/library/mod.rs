@@ -10,6 +10,9 @@
 
 use serde_json::{Value, json};
 
+mod variants;
+pub use variants::{MAX_INDEX, NamedDesign, SEPARATOR, resolve};
+
 use crate::error::Result;
 use crate::pattern::{Curve, Pattern, SpecFile};
 
@@ -322,12 +325,24 @@ fn quadratic(s: [f64; 2], e: [f64; 2], control: [f64; 2]) -> Value {
 impl Design {
     /// The design as a checked pattern.
     pub fn pattern(&self) -> Result<Pattern> {
-        Pattern::from_spec(self.name, self.spec())
+        self.params.pattern(self.name)
     }
 
     /// The design as GarmentCode specification JSON.
     pub fn spec(&self) -> SpecFile {
-        let p = &self.params;
+        self.params.spec()
+    }
+}
+
+impl DesignParams {
+    /// These measurements as a checked pattern named `name`.
+    pub fn pattern(&self, name: &str) -> Result<Pattern> {
+        Pattern::from_spec(name, self.spec())
+    }
+
+    /// These measurements as GarmentCode specification JSON.
+    pub fn spec(&self) -> SpecFile {
+        let p = self;
         let ya = ARMPIT_Y - p.armhole_drop - p.hem_height;
         let ys = SHOULDER_Y - p.hem_height;
         let yn = NECK_Y - p.hem_height;
@@ -462,7 +477,7 @@ impl Design {
         armpit: [f64; 2],
         shoulder: [f64; 2],
     ) {
-        let p = &self.params;
+        let p = self;
         // The armhole's length on the torso sets the sleeve's width there.
         let corner = [shoulder[0], armpit[1]];
         let mid = [

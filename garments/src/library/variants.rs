@@ -1,0 +1,156 @@
+//! Variants of the library's designs: `tshirt_regular~3` is variant 3 of `tshirt_regular`,
+//! its measurements drawn around the base design's. The name is the whole recipe (the draw is
+//! seeded by the base's name and the index), so the same name sews the same design in every
+//! command and on every machine.
+//!
+//! Why: the surrogate generalizes to unseen designs by what its training designs span, and a
+//! 19-design library spans little (docs/SURROGATE.md, "The ablation"). A variant keeps its
+//! base's family: the neckline type and whether it has sleeves never change, and every
+//! measurement moves by at most a few cm (a sleeve by 15% of its length), so a variant of a
+//! t-shirt is a t-shirt of another cut.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::{DESIGNS, Design, DesignParams};
+use crate::error::Result;
+use crate::pattern::Pattern;
+
+/// Between a base design's name and its variant's index.
+pub const SEPARATOR: char = '~';
+
+/// The largest variant index.
+pub const MAX_INDEX: u32 = 9999;
+
+/// A library design or a variant of one, resolved from its name.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedDesign {
+    /// The name it was asked by (`base` or `base~k`).
+    pub name: String,
+    /// The library design it is, or is a variant of.
+    pub base: &'static Design,
+    /// The variant's index; 0 for the base design itself.
+    pub index: u32,
+    /// Its measurements.
+    pub params: DesignParams,
+}
+
+impl NamedDesign {
+    /// The design as a checked pattern.
+    pub fn pattern(&self) -> Result<Pattern> {
+        self.params.pattern(&self.name)
+    }
+}
+
+/// The design called `name`: a library design, or `base~k` with k in 1..=[`MAX_INDEX`].
+pub fn resolve(name: &str) -> Option<NamedDesign> {
+    let (base_name, index) = match name.split_once(SEPARATOR) {
+        None => (name, 0),
+        Some((base, k)) => {
+            // Digits only, no sign or leading zero, so one design has one name.
+            if k.is_empty() || k.starts_with('0') || !k.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            (base, k.parse::<u32>().ok().filter(|&k| k <= MAX_INDEX)?)
+        }
+    };
+    let base = DESIGNS.iter().find(|d| d.name == base_name)?;
+    let params = if index == 0 {
+        base.params
+    } else {
+        jittered(base, index)
+    };
+    Some(NamedDesign {
+        name: name.to_string(),
+        base,
+        index,
+        params,
+    })
+}
+
+/// FNV-1a of the base's name: a seed that no Rust or crate version changes (std's hashers
+/// may change between releases).
+fn name_seed(name: &str) -> u64 {
+    name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// Variant `index` of `base`: each measurement drawn uniformly in a band around the base's,
+/// cm. Widths move more outwards than inwards, so a tight base never gets tighter than the
+/// body allows.
+fn jittered(base: &Design, index: u32) -> DesignParams {
+    let mut rng = ChaCha8Rng::seed_from_u64(name_seed(base.name) ^ ((index as u64) << 32));
+    let p = base.params;
+    let mut draw = |value: f64, below: f64, above: f64| value + rng.random_range(-below..=above);
+    let mut v = p;
+    v.hem_height = draw(p.hem_height, 6.0, 6.0).clamp(30.0, 110.0);
+    v.chest_half_width = draw(p.chest_half_width, 1.0, 2.5);
+    v.hem_half_width = draw(p.hem_half_width, 1.0, 3.0).max(v.chest_half_width - 1.0);
+    v.armhole_drop = draw(p.armhole_drop, 1.0, 1.0).max(0.0);
+    v.shoulder_half_width = draw(p.shoulder_half_width, 1.0, 1.0);
+    v.neck_half_width = draw(p.neck_half_width, 1.0, 1.0);
+    v.front_neck_depth = draw(p.front_neck_depth, 2.5, 2.5).max(2.0);
+    v.back_neck_depth = draw(p.back_neck_depth, 1.0, 1.0).max(1.0);
+    if p.sleeve_length > 0.0 {
+        v.sleeve_length = (p.sleeve_length * draw(1.0, 0.15, 0.15)).max(6.0);
+        v.cuff_half_width = draw(p.cuff_half_width, 1.5, 1.5).max(8.0);
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_base_name_resolves_to_the_library_design() {
+        let d = resolve("tshirt_regular").unwrap();
+        assert_eq!((d.index, d.base.name), (0, "tshirt_regular"));
+        assert_eq!(d.params, d.base.params);
+        assert_eq!(d.pattern().unwrap(), d.base.pattern().unwrap());
+    }
+
+    #[test]
+    fn variants_are_deterministic_distinct_and_stay_in_their_family() {
+        for base in DESIGNS.iter() {
+            let mut seen = vec![base.params];
+            for k in 1..=4 {
+                let name = format!("{}~{k}", base.name);
+                let v = resolve(&name).unwrap();
+                assert_eq!(v, resolve(&name).unwrap(), "{name}: not deterministic");
+                assert!(!seen.contains(&v.params), "{name}: repeats a design");
+                seen.push(v.params);
+                let (p, b) = (v.params, base.params);
+                assert_eq!(p.neckline, b.neckline, "{name}");
+                assert_eq!(p.sleeve_length > 0.0, b.sleeve_length > 0.0, "{name}");
+                assert!((p.hem_height - b.hem_height).abs() <= 6.0, "{name}");
+                assert!(p.chest_half_width >= b.chest_half_width - 1.0, "{name}");
+                if b.sleeve_length > 0.0 {
+                    assert!((p.sleeve_length / b.sleeve_length - 1.0).abs() <= 0.15 + 1e-12);
+                }
+                let pattern = v.pattern().unwrap_or_else(|e| panic!("{name}: {e}"));
+                assert_eq!(pattern.name, name);
+            }
+        }
+    }
+
+    #[test]
+    fn malformed_variant_names_resolve_to_nothing() {
+        for bad in [
+            "tshirt_regular~",
+            "tshirt_regular~0",
+            "tshirt_regular~01",
+            "tshirt_regular~-1",
+            "tshirt_regular~+1",
+            "tshirt_regular~1.5",
+            "tshirt_regular~10000",
+            "tshirt_regular~1~2",
+            "no_such_design~1",
+            "~1",
+        ] {
+            assert!(resolve(bad).is_none(), "{bad}");
+        }
+        assert!(resolve("tshirt_regular~9999").is_some());
+    }
+}
