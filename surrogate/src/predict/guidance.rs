@@ -87,25 +87,76 @@ pub struct Clearance {
 }
 
 /// The clearance of every point that is inside the body or within `reach` outside it; `None`
-/// for points further out. Points outside the body's bounding box by more than `reach` are
-/// skipped without a query.
+/// for points further out.
 pub fn clearances(body: &MeshSurface, points: &[[f64; 3]], reach: f64) -> Vec<Option<Clearance>> {
-    points
-        .iter()
-        .map(|p| {
-            let q = Vec3::from(*p);
-            if !body.near_bounds(q, reach) {
-                return None;
+    points.iter().map(|p| clearance(body, *p, reach)).collect()
+}
+
+/// Slack of the first, bounded query beyond `reach`, m: parry3d measures in f32, so a point
+/// just beyond `reach` is still found and then judged in f64 as the unbounded query would be.
+const BOUND_SLACK_M: f64 = 1e-3;
+
+/// One point's clearance (see [`clearances`]). A point outside the body's bounding box by more
+/// than `reach` is skipped without a query. Otherwise a query bounded near `reach` answers
+/// every point within it (most of a garment is further out, where the bounded query stops
+/// early); a point it does not find is further from the surface than that, and is inside
+/// only where the winding number says so, which is the unbounded query's own test of the side:
+/// only those points pay for the unbounded query. The answers are the unbounded query's.
+fn clearance(body: &MeshSurface, p: [f64; 3], reach: f64) -> Option<Clearance> {
+    let q = Vec3::from(p);
+    if !body.near_bounds(q, reach) {
+        return None;
+    }
+    let found = match body.query(q, reach.max(0.0) + BOUND_SLACK_M) {
+        Some(found) => found,
+        None if body.winding_number(q) > 0 => body.query(q, f64::INFINITY)?,
+        None => return None,
+    };
+    (found.distance < reach).then(|| Clearance {
+        distance: found.distance,
+        normal: found.normal.into(),
+    })
+}
+
+/// A point that moved less than this since a [`ClearanceCache`] asked keeps the cached answer,
+/// m: far below the band and any metric's resolution, above the sampler's f32 rounding
+/// (untouched texels come back from an Euler step a few nm away).
+pub const REUSE_WITHIN_M: f64 = 1e-6;
+
+/// The clearances of one frame's points from the last query of the same body, so a later
+/// query asks again only for the points that moved: a guidance refinement pass moves only the
+/// vertices in the band and their texel neighbours.
+#[derive(Debug, Clone, Default)]
+pub struct ClearanceCache {
+    points: Vec<[f64; 3]>,
+    clearances: Vec<Option<Clearance>>,
+    reach: f64,
+}
+
+impl ClearanceCache {
+    /// The clearances of `points` (as [`clearances`] gives them, up to [`REUSE_WITHIN_M`]).
+    pub fn clearances(
+        &mut self,
+        body: &MeshSurface,
+        points: &[[f64; 3]],
+        reach: f64,
+    ) -> &[Option<Clearance>] {
+        if self.points.len() != points.len() || self.reach != reach {
+            self.points = points.to_vec();
+            self.clearances = clearances(body, points, reach);
+            self.reach = reach;
+            return &self.clearances;
+        }
+        let within = REUSE_WITHIN_M * REUSE_WITHIN_M;
+        for ((known, answer), p) in self.points.iter_mut().zip(&mut self.clearances).zip(points) {
+            let moved: f64 = (0..3).map(|c| (p[c] - known[c]).powi(2)).sum();
+            if moved >= within {
+                *known = *p;
+                *answer = clearance(body, *p, reach);
             }
-            // Unbounded: a bounded query misses points deeper inside than its bound.
-            body.query(q, f64::INFINITY)
-                .filter(|s| s.distance < reach)
-                .map(|s| Clearance {
-                    distance: s.distance,
-                    normal: s.normal.into(),
-                })
-        })
-        .collect()
+        }
+        &self.clearances
+    }
 }
 
 /// The gradient of L_c with respect to every point, from their clearances.
@@ -220,6 +271,50 @@ pub(crate) mod tests {
         assert_eq!(&stepped[3..], &points[3..]);
         let after = clearances(&body, &stepped, band);
         assert_eq!(penetration(&after).0, 0);
+    }
+
+    /// The bounded-first query answers as the unbounded one does, deep inside and far out
+    /// included, and the cache re-asks only for the points that moved.
+    #[test]
+    fn the_bounded_first_query_and_the_cache_answer_as_the_unbounded_query() {
+        let (v, f) = sphere(0.2, [0.0, 1.0, 0.0]);
+        let body = MeshSurface::new("sphere", &v, &f).unwrap();
+        let band = 0.003;
+        let mut points = Vec::new();
+        for k in 0..400 {
+            let r = 0.002 + 0.25 * (k as f64 / 400.0);
+            let (a, b) = (k as f64 * 0.731, k as f64 * 0.377);
+            points.push([
+                r * a.cos() * b.sin(),
+                1.0 + r * a.sin() * b.sin(),
+                r * b.cos(),
+            ]);
+        }
+        let unbounded: Vec<Option<Clearance>> = points
+            .iter()
+            .map(|p| {
+                body.query(Vec3::from(*p), f64::INFINITY)
+                    .filter(|s| s.distance < band)
+                    .map(|s| Clearance {
+                        distance: s.distance,
+                        normal: s.normal.into(),
+                    })
+            })
+            .collect();
+        assert!(unbounded.iter().flatten().any(|c| c.distance < -0.1));
+        assert!(unbounded.iter().any(|c| c.is_none()));
+        assert_eq!(clearances(&body, &points, band), unbounded);
+        let mut cache = ClearanceCache::default();
+        assert_eq!(cache.clearances(&body, &points, band), &unbounded[..]);
+        // Move one point out of the body and one by less than the reuse distance.
+        let mut moved = points.clone();
+        moved[0] = [0.0, 1.5, 0.0];
+        moved[1][0] += REUSE_WITHIN_M / 10.0;
+        let again = cache.clearances(&body, &moved, band).to_vec();
+        assert_eq!(again[0], None);
+        assert_eq!(again[1], unbounded[1]);
+        assert_eq!(&again[2..], &unbounded[2..]);
+        assert_eq!(again[0], clearances(&body, &moved[..1], band)[0]);
     }
 
     #[test]

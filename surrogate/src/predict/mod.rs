@@ -10,7 +10,8 @@
 mod guidance;
 
 pub use guidance::{
-    CONTACT_BAND_M, Clearance, Guidance, clearances, penalty_gradient, penetration, push_out,
+    CONTACT_BAND_M, Clearance, ClearanceCache, Guidance, REUSE_WITHIN_M, clearances,
+    penalty_gradient, penetration, push_out,
 };
 
 use std::time::Instant;
@@ -522,32 +523,36 @@ impl<'a> Predictor<'a> {
         let sampling = Instant::now();
         let image = &garment.image;
         let spread = &garment.spread;
+        // Each frame's clearances from its last query: a refinement pass (and the final
+        // inside test) asks again only for the vertices that moved.
+        let mut known = vec![ClearanceCache::default(); b];
         // The guidance term of normalized maps `values` at `scale`: the penalty's gradient of
         // each frame, spread to its texels and divided by the targets' std.
-        let correction_of = |values: &[f32], scale: f64| -> Option<Vec<f32>> {
-            let mut correction = vec![0.0f32; values.len()];
-            for ((z, out), (base, surface)) in values
-                .chunks(3 * plane)
-                .zip(correction.chunks_mut(3 * plane))
-                .zip(bases.iter().zip(surfaces))
-            {
-                let map = texels(z, &targets_stats.mean, &targets_stats.std);
-                let world = base.decode(&image.read(&map).ok()?);
-                let gradient: Vec<[f64; 3]> =
-                    penalty_gradient(&clearances(surface, &world, band), band)
-                        .into_iter()
-                        .map(|g| base.gradient_to_target(g))
-                        .collect();
-                let spread_image = image.read_transpose(&gradient).ok()?;
-                for (c, out) in out.chunks_mut(plane).enumerate() {
-                    let factor = scale / targets_stats.std[c];
-                    for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
-                        *o = (factor * g[c] * w) as f32;
+        let correction_of =
+            |values: &[f32], scale: f64, known: &mut [ClearanceCache]| -> Option<Vec<f32>> {
+                let mut correction = vec![0.0f32; values.len()];
+                for ((z, out), ((base, surface), cache)) in values
+                    .chunks(3 * plane)
+                    .zip(correction.chunks_mut(3 * plane))
+                    .zip(bases.iter().zip(surfaces).zip(known.iter_mut()))
+                {
+                    let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                    let world = base.decode(&image.read(&map).ok()?);
+                    let gradient: Vec<[f64; 3]> =
+                        penalty_gradient(cache.clearances(surface, &world, band), band)
+                            .into_iter()
+                            .map(|g| base.gradient_to_target(g))
+                            .collect();
+                    let spread_image = image.read_transpose(&gradient).ok()?;
+                    for (c, out) in out.chunks_mut(plane).enumerate() {
+                        let factor = scale / targets_stats.std[c];
+                        for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
+                            *o = (factor * g[c] * w) as f32;
+                        }
                     }
                 }
-            }
-            Some(correction)
-        };
+                Some(correction)
+            };
         let mut values = vec![0.0f32; b * 3 * plane];
         for d in 0..settings.draws {
             let noise = tensor(&noise_of(d)).reshape([b, 3, r, r]);
@@ -559,7 +564,7 @@ impl<'a> Predictor<'a> {
                 let ds = s - grid[k + 1];
                 let scale = settings.guidance.weight.min(1.0 / ds);
                 let values: Vec<f32> = x0_hat.clone().try_into_vec_as().ok()?;
-                let correction = correction_of(&values, scale)?;
+                let correction = correction_of(&values, scale, &mut known)?;
                 timing.guidance_s += t.elapsed().as_secs_f64();
                 Some(tensor(&correction).reshape([b, 3, r, r]))
             });
@@ -575,7 +580,7 @@ impl<'a> Predictor<'a> {
         if settings.guidance.weight > 0.0 {
             for _ in 0..settings.guidance.refine {
                 let t = Instant::now();
-                if let Some(correction) = correction_of(&values, 1.0) {
+                if let Some(correction) = correction_of(&values, 1.0, &mut known) {
                     values.iter_mut().zip(correction).for_each(|(v, c)| *v -= c);
                 }
                 timing.guidance_s += t.elapsed().as_secs_f64();
@@ -588,17 +593,18 @@ impl<'a> Predictor<'a> {
             .chunks(3 * plane)
             .zip(&bases)
             .zip(chunk.iter().zip(posed))
+            .zip(known.iter_mut())
             .enumerate()
-            .map(|(i, ((z, base), (&index, body)))| {
+            .map(|(i, (((z, base), (&index, body)), cache))| {
                 let map = texels(z, &targets_stats.mean, &targets_stats.std);
                 let mut world = base.decode(&image.read(&map)?);
                 let (mut inside, mut max_penetration_m, mut pushed) = (None, None, 0);
                 if tests_after {
-                    let c = clearances(&surfaces[i], &world, band);
-                    let (n, deepest) = penetration(&c);
+                    let c = cache.clearances(&surfaces[i], &world, band);
+                    let (n, deepest) = penetration(c);
                     (inside, max_penetration_m) = (Some(n), Some(deepest));
                     if settings.resolve_penetration {
-                        pushed = push_out(&mut world, &c, band);
+                        pushed = push_out(&mut world, c, band);
                     }
                 }
                 Ok(PredictedFrame {
