@@ -100,10 +100,8 @@ pub fn garment(
     }
     if !garments::BUILTIN.contains(&source) {
         bail!(
-            "unknown garment '{source}': not a library design ({}) or a variant of one (name{}k, k in 1..={}), a built-in ({}) or a file",
-            garments::library::design_names().join(", "),
-            garments::library::SEPARATOR,
-            garments::library::MAX_INDEX,
+            "unknown garment '{source}': not a library design ({}), a built-in ({}) or a file",
+            garments::library::naming(),
             garments::BUILTIN.join(", ")
         );
     }
@@ -124,9 +122,9 @@ pub fn cache_dir() -> std::path::PathBuf {
     base.join("dit-garment")
 }
 
-/// A library design's (or a variant's) template on `model`, made (sewn and draped, about 5-20 s) on first use
-/// and cached under [`cache_dir`], keyed by the pattern, the body, the sewing options, the
-/// software version and the engine revision.
+/// A library design's (or a variant's) template on `model`, made (sewn and draped, about
+/// 5-20 s) on first use and cached under [`cache_dir`], keyed by the pattern, the body, the
+/// sewing options, the software version and the engine revision.
 /// Refused when the design fails a quality gate. The cached OBJ is always what is returned (read
 /// back after making), so results do not depend on whether the cache was warm.
 pub fn library_template(

@@ -60,10 +60,8 @@ pub fn run(command: GarmentsCommand) -> Result<()> {
 
 fn unknown(name: &str) -> anyhow::Error {
     anyhow::anyhow!(
-        "unknown design '{name}' (designs: {}; a variant: name{}k, k in 1..={})",
-        garments::library::design_names().join(", "),
-        garments::library::SEPARATOR,
-        garments::library::MAX_INDEX
+        "unknown design '{name}' (designs: {})",
+        garments::library::naming()
     )
 }
 

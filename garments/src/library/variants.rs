@@ -42,6 +42,14 @@ impl NamedDesign {
     }
 }
 
+/// What a design name may be, for error messages: the library's names or a variant's form.
+pub fn naming() -> String {
+    format!(
+        "{}; or a variant NAME{SEPARATOR}K, K in 1..={MAX_INDEX}",
+        super::design_names().join(", ")
+    )
+}
+
 /// The design called `name`: a library design, or `base~k` with k in 1..=[`MAX_INDEX`].
 pub fn resolve(name: &str) -> Option<NamedDesign> {
     let (base_name, index) = match name.split_once(SEPARATOR) {

@@ -282,9 +282,7 @@ impl RunConfig {
         }
         None
     }
-}
 
-impl RunConfig {
     /// What keeps `self` from resuming the run saved as `saved`: every difference but a
     /// larger `training.steps`, which extends the run (the learning rate's schedule from the
     /// resumed step on is then the longer run's).
