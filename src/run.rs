@@ -281,6 +281,8 @@ pub fn summary_json(s: &RunSummary, out: &Path) -> serde_json::Value {
     json!({
         "frames": s.frames, "finite": s.finite, "wall_s": s.wall_s, "frames_per_s": s.frames_per_s,
         "max_penetration_m": s.max_penetration_m, "max_verts_inside": s.max_verts_inside,
+        "max_penetration_overlap_m": s.max_penetration_overlap_m,
+        "max_verts_inside_overlap": s.max_verts_inside_overlap,
         "max_edge_stretch": s.max_edge_stretch, "max_self_intersections": s.max_self_intersections,
         "vertices": s.vertices,
         "mean_iterations": s.mean_iterations, "deep_contacts": s.deep_contacts,

@@ -171,6 +171,8 @@ fn simulate_reports_the_checked_keys_and_rejects_bad_settings() {
         "frames_per_s",
         "max_penetration_m",
         "max_verts_inside",
+        "max_penetration_overlap_m",
+        "max_verts_inside_overlap",
         "max_self_intersections",
         "max_edge_stretch",
         "vertices",

@@ -168,10 +168,18 @@ pub struct FrameStats {
     /// Solver report of the frame's steps.
     #[serde(flatten)]
     pub solver: FrameReport,
-    /// Deepest cloth vertex inside the body at the end of the frame, m (0 if none).
+    /// Deepest cloth vertex inside the body at the end of the frame, away from where the
+    /// body overlaps itself, m (0 if none).
     pub max_penetration_m: f64,
-    /// Cloth vertices inside the body at the end of the frame.
+    /// Cloth vertices inside the body at the end of the frame, away from body overlaps.
     pub vertices_inside: usize,
+    /// Deepest cloth vertex inside the body where the body overlaps itself, m (0 if none;
+    /// `sim::obstacles::split_penetration`).
+    #[serde(default)]
+    pub max_penetration_overlap_m: f64,
+    /// Cloth vertices inside the body where the body overlaps itself.
+    #[serde(default)]
+    pub vertices_inside_overlap: usize,
     /// Largest edge length / rest length.
     pub max_edge_stretch: f64,
     /// Mean edge length / rest length.
@@ -232,10 +240,14 @@ pub struct RunSummary {
     pub wall_s: f64,
     /// Output frames per second of wall time.
     pub frames_per_s: f64,
-    /// Largest penetration over the frames, m.
+    /// Largest penetration over the frames away from body overlaps, m.
     pub max_penetration_m: f64,
-    /// Largest count of vertices inside the body over the frames.
+    /// Largest count of vertices inside the body over the frames, away from body overlaps.
     pub max_verts_inside: usize,
+    /// Largest penetration over the frames where the body overlaps itself, m.
+    pub max_penetration_overlap_m: f64,
+    /// Largest count of vertices inside the body where it overlaps itself, over the frames.
+    pub max_verts_inside_overlap: usize,
     /// Largest edge stretch over the frames.
     pub max_edge_stretch: f64,
     /// Largest count of crossing garment triangle pairs over the frames.
@@ -506,16 +518,17 @@ impl Scene {
         wall: f64,
     ) -> FrameStats {
         let distances = body.measure(&state.positions, 0.03);
-        let inside = distances.iter().filter(|&&d| d < 0.0).count();
-        let depth = distances.iter().fold(0.0f64, |a, &d| a.max(-d));
+        let penetration = body.split_penetration(&state.positions, &distances);
         let (max_stretch, mean_stretch) = edge_stretch(mesh, &state.positions);
         let self_intersections =
             crate::count_self_intersections(&state.positions, mesh.triangles());
         FrameStats {
             frame,
             solver: report,
-            max_penetration_m: depth,
-            vertices_inside: inside,
+            max_penetration_m: penetration.depth_m,
+            vertices_inside: penetration.inside,
+            max_penetration_overlap_m: penetration.overlap_depth_m,
+            vertices_inside_overlap: penetration.overlap_inside,
             max_edge_stretch: max_stretch,
             mean_edge_stretch: mean_stretch,
             self_intersections,
@@ -536,6 +549,12 @@ fn scene_body(obstacles: &mut Obstacles) -> Result<&mut AnimatedMesh> {
 fn accumulate(summary: &mut RunSummary, stats: &FrameStats) {
     summary.max_penetration_m = summary.max_penetration_m.max(stats.max_penetration_m);
     summary.max_verts_inside = summary.max_verts_inside.max(stats.vertices_inside);
+    summary.max_penetration_overlap_m = summary
+        .max_penetration_overlap_m
+        .max(stats.max_penetration_overlap_m);
+    summary.max_verts_inside_overlap = summary
+        .max_verts_inside_overlap
+        .max(stats.vertices_inside_overlap);
     summary.max_edge_stretch = summary.max_edge_stretch.max(stats.max_edge_stretch);
     summary.max_self_intersections = summary.max_self_intersections.max(stats.self_intersections);
 }

@@ -17,10 +17,17 @@ use crate::scene::RunSummary;
 pub struct GateResult {
     /// Every value finite.
     pub finite: bool,
-    /// Deepest vertex inside the body over all frames, m.
+    /// Deepest vertex inside the body over all frames, away from where the body overlaps
+    /// itself (the gated figure), m.
     pub max_penetration_m: f64,
-    /// Most vertices inside the body in one frame.
+    /// Most vertices inside the body in one frame, away from body overlaps.
     pub max_verts_inside: usize,
+    /// Deepest vertex inside the body where it overlaps itself, m (reported, not gated).
+    #[serde(default)]
+    pub max_penetration_overlap_m: f64,
+    /// Most vertices inside the body in one frame where it overlaps itself.
+    #[serde(default)]
+    pub max_verts_inside_overlap: usize,
     /// Largest edge stretch.
     pub max_edge_stretch: f64,
     /// Most crossing garment triangle pairs in one frame.
@@ -71,6 +78,8 @@ impl GateResult {
             finite: summary.finite,
             max_penetration_m: summary.max_penetration_m,
             max_verts_inside: summary.max_verts_inside,
+            max_penetration_overlap_m: summary.max_penetration_overlap_m,
+            max_verts_inside_overlap: summary.max_verts_inside_overlap,
             max_edge_stretch: summary.max_edge_stretch,
             max_self_intersections: summary.max_self_intersections,
             timed_out: false,
@@ -85,6 +94,8 @@ impl GateResult {
             finite: !reason.contains("finite"),
             max_penetration_m: f64::NAN,
             max_verts_inside: 0,
+            max_penetration_overlap_m: f64::NAN,
+            max_verts_inside_overlap: 0,
             max_edge_stretch: f64::NAN,
             max_self_intersections: 0,
             timed_out,

@@ -10,6 +10,7 @@
 
 use rayon::prelude::*;
 
+use super::overlap::{Penetration, split_penetration};
 use super::trimesh::MeshSurface;
 use super::{DetectionInput, Obstacle, SurfacePoint};
 use crate::cloth::Vec3;
@@ -135,6 +136,12 @@ impl AnimatedMesh {
                 }
             })
             .collect()
+    }
+
+    /// The points inside the body (negative `distances`, from [`Self::measure`]) split by
+    /// whether the body overlaps itself there.
+    pub fn split_penetration(&self, points: &[Vec3], distances: &[f64]) -> Penetration {
+        split_penetration(&self.surface, points, distances)
     }
 
     fn ensure_tracks(&mut self, n: usize) {

@@ -4,10 +4,12 @@
 
 mod analytic;
 mod body;
+mod overlap;
 mod trimesh;
 
 pub use analytic::{Cuboid, Kinematic, Plane, Sphere};
 pub use body::AnimatedMesh;
+pub use overlap::{OVERLAP_REACH_M, Penetration, split_penetration};
 pub use trimesh::{MeshSurface, StaticMesh};
 
 use rayon::prelude::*;

@@ -178,20 +178,37 @@ impl MeshSurface {
                 faces.iter().map(|&f| unit(f)).sum()
             }
             TrianglePointLocation::OnVertex(i) => {
-                let v = self.faces[t as usize][i as usize];
-                let ring = &self.ring_faces
-                    [self.ring_ptr[v as usize] as usize..self.ring_ptr[v as usize + 1] as usize];
-                ring.iter()
-                    .map(|&f| {
-                        let face = self.faces[f as usize];
-                        let k = face.iter().position(|&u| u == v).expect("ring of v");
-                        let p = |j: usize| self.vertices[face[(k + j) % 3] as usize];
-                        let angle = (p(1) - p(0)).angle_between(p(2) - p(0));
-                        unit(f) * angle
-                    })
-                    .sum()
+                self.vertex_pseudo_normal(self.faces[t as usize][i as usize])
             }
         }
+    }
+
+    /// A vertex's angle-weighted sum of its triangles' unit normals (not normalized).
+    fn vertex_pseudo_normal(&self, v: u32) -> Vector {
+        let unit = |f: u32| self.triangle(f).normal().unwrap_or(Vector::ZERO);
+        let ring = &self.ring_faces
+            [self.ring_ptr[v as usize] as usize..self.ring_ptr[v as usize + 1] as usize];
+        ring.iter()
+            .map(|&f| {
+                let face = self.faces[f as usize];
+                let k = face.iter().position(|&u| u == v).expect("ring of v");
+                let p = |j: usize| self.vertices[face[(k + j) % 3] as usize];
+                let angle = (p(1) - p(0)).angle_between(p(2) - p(0));
+                unit(f) * angle
+            })
+            .sum()
+    }
+
+    /// Vertex `v`'s position, m.
+    pub fn vertex(&self, v: usize) -> Vec3 {
+        from_parry(self.vertices[v])
+    }
+
+    /// Vertex `v`'s outward unit normal (angle-weighted), or zero where its triangles cancel.
+    pub fn vertex_normal(&self, v: usize) -> Vec3 {
+        let n = from_parry(self.vertex_pseudo_normal(v as u32));
+        let length = n.norm();
+        if length > 0.0 { n / length } else { n }
     }
 
     /// The closest surface point if within `max_distance`, else `None` (whatever the side).

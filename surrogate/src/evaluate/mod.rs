@@ -12,13 +12,13 @@ pub mod baselines;
 
 use serde::{Deserialize, Serialize};
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores, jitter};
-use sim::obstacles::MeshSurface;
+use sim::obstacles::{MeshSurface, Penetration, split_penetration};
 
 use motions::BodyModel;
 
 use crate::data::Sequence;
 use crate::error::{Error, Result};
-use crate::predict::{clearances, penetration};
+use crate::predict::clearances;
 
 /// The methods a report compares, in its order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -79,6 +79,17 @@ pub struct MethodScores {
     pub stretch_p99: f64,
     /// Vertices inside the body (exact inside test), %, mean over the scored frames.
     pub inside_percent: f64,
+    /// The part of `inside_percent` where the body overlaps itself
+    /// (`sim::obstacles::split_penetration`), %.
+    #[serde(default)]
+    pub inside_overlap_percent: f64,
+    /// Deepest vertex inside the body away from its overlaps, over the scored frames (and
+    /// sequences), m: the engine's gated figure.
+    #[serde(default)]
+    pub max_penetration_m: f64,
+    /// Deepest vertex inside the body where it overlaps itself, m.
+    #[serde(default)]
+    pub max_penetration_overlap_m: f64,
     /// Predicted frames per second, preparation excluded.
     pub fps: f64,
     /// Frames scored.
@@ -91,7 +102,7 @@ pub struct MethodScores {
 }
 
 /// Every key of a [`MethodScores`] with its unit.
-pub const UNITS: [(&str, &str); 16] = [
+pub const UNITS: [(&str, &str); 19] = [
     ("E_v", "cm"),
     ("E_CD", "100 m^2 (squared distances)"),
     ("E_CD_cm", "cm"),
@@ -109,6 +120,15 @@ pub const UNITS: [(&str, &str); 16] = [
     (
         "inside_percent",
         "% of garment vertices inside the body (exact inside test)",
+    ),
+    (
+        "inside_overlap_percent",
+        "% of garment vertices inside the body where it overlaps itself",
+    ),
+    ("max_penetration_m", "m (outside the body's own overlaps)"),
+    (
+        "max_penetration_overlap_m",
+        "m (where the body overlaps itself)",
     ),
     ("fps", "frames/s"),
     ("sequences", "count"),
@@ -133,6 +153,12 @@ impl MethodScores {
             jitter: avg(|r| r.jitter),
             stretch_p99: avg(|r| r.stretch_p99),
             inside_percent: avg(|r| r.inside_percent),
+            inside_overlap_percent: avg(|r| r.inside_overlap_percent),
+            max_penetration_m: rows.iter().map(|r| r.max_penetration_m).fold(0.0, f64::max),
+            max_penetration_overlap_m: rows
+                .iter()
+                .map(|r| r.max_penetration_overlap_m)
+                .fold(0.0, f64::max),
             fps: if time > 0.0 { frames / time } else { 0.0 },
             frames_scored: rows.iter().map(|r| r.frames_scored).sum(),
             frames_predicted: rows.iter().map(|r| r.frames_predicted).sum(),
@@ -170,6 +196,16 @@ fn edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
 
 fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The points inside `body` (exact inside test), split by whether it overlaps itself there.
+fn split_inside(body: &MeshSurface, points: &[[f64; 3]]) -> Penetration {
+    let distances: Vec<f64> = clearances(body, points, 0.0)
+        .iter()
+        .map(|c| c.map_or(f64::INFINITY, |c| c.distance))
+        .collect();
+    let points: Vec<sim::Vec3> = points.iter().map(|&p| sim::Vec3::from(p)).collect();
+    split_penetration(body, &points, &distances)
 }
 
 impl<'a> Truth<'a> {
@@ -240,7 +276,8 @@ impl<'a> Truth<'a> {
     pub fn score(&self, predicted: &[Vec<[f64; 3]>], fps: f64) -> MethodScores {
         let mut per_frame = Vec::with_capacity(self.scored.len());
         let mut ratios = Vec::new();
-        let mut inside = 0.0;
+        let (mut inside, mut inside_overlap) = (0.0, 0.0);
+        let mut deepest = Penetration::default();
         for (j, &i) in self.scored.iter().enumerate() {
             let k = self.frames[i];
             let pred = &predicted[i];
@@ -257,9 +294,13 @@ impl<'a> Truth<'a> {
                     .iter()
                     .map(|&(a, b, r)| distance(pred[a as usize], pred[b as usize]) / r),
             );
-            let (n, _) = penetration(&clearances(&self.surfaces[j], pred, 0.0));
-            inside += 100.0 * n as f64 / pred.len().max(1) as f64;
+            let split = split_inside(&self.surfaces[j], pred);
+            let percent = 100.0 / pred.len().max(1) as f64;
+            inside += percent * (split.inside + split.overlap_inside) as f64;
+            inside_overlap += percent * split.overlap_inside as f64;
+            deepest = deepest.max(split);
         }
+        let frames = self.scored.len().max(1) as f64;
         ratios.sort_by(f64::total_cmp);
         let p99 = ratios
             .get(((ratios.len() as f64 * 0.99) as usize).min(ratios.len().saturating_sub(1)))
@@ -269,7 +310,10 @@ impl<'a> Truth<'a> {
             scores: Scores::mean(&per_frame),
             jitter: jitter(predicted),
             stretch_p99: p99,
-            inside_percent: inside / self.scored.len().max(1) as f64,
+            inside_percent: inside / frames,
+            inside_overlap_percent: inside_overlap / frames,
+            max_penetration_m: deepest.depth_m,
+            max_penetration_overlap_m: deepest.overlap_depth_m,
             fps,
             frames_scored: self.scored.len(),
             frames_predicted: predicted.len(),
