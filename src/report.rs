@@ -85,7 +85,7 @@ fn one_factor(split: &str) -> Option<f64> {
     paper_numbers()["one_factor_E_v"][split].as_f64()
 }
 
-const COLUMNS: [&str; 13] = [
+const COLUMNS: [&str; 16] = [
     "E_v",
     "E_CD",
     "E_CD_cm",
@@ -98,8 +98,30 @@ const COLUMNS: [&str; 13] = [
     "jitter",
     "stretch_p99",
     "inside_percent",
+    "inside_overlap_percent",
+    "max_penetration_m",
+    "max_penetration_overlap_m",
     "fps",
 ];
+
+/// The columns the simulation's own row fills (plausibility, not error against itself).
+const SIMULATION_COLUMNS: [&str; 6] = [
+    "jitter",
+    "stretch_p99",
+    "inside_percent",
+    "inside_overlap_percent",
+    "max_penetration_m",
+    "max_penetration_overlap_m",
+];
+
+/// A column's value as the report prints it (depths in m to 0.1 mm).
+fn cell(s: &MethodScores, key: &str) -> String {
+    if key.ends_with("_m") {
+        format!("{:.4}", value(s, key))
+    } else {
+        format!("{:.3}", value(s, key))
+    }
+}
 
 fn value(s: &MethodScores, key: &str) -> f64 {
     serde_json::to_value(s)
@@ -219,13 +241,16 @@ fn tables(splits: &SplitRows, simulation: &BTreeMap<String, MethodScores>) -> St
             header("method", &COLUMNS)
         );
         for (m, r) in methods {
-            let v = COLUMNS.map(|k| format!("{:.3}", value(r, k)));
+            let v = COLUMNS.map(|k| cell(r, k));
             let _ = writeln!(md, "{}", row(m.name(), v.into_iter()));
         }
         if let Some(sim) = simulation.get(s) {
-            let v = COLUMNS.map(|k| match k {
-                "jitter" | "stretch_p99" | "inside_percent" => format!("{:.3}", value(sim, k)),
-                _ => String::new(),
+            let v = COLUMNS.map(|k| {
+                if SIMULATION_COLUMNS.contains(&k) {
+                    cell(sim, k)
+                } else {
+                    String::new()
+                }
             });
             let _ = writeln!(md, "{}", row("simulation (reference)", v.into_iter()));
         }

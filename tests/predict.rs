@@ -354,6 +354,9 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
         "jitter",
         "stretch_p99",
         "inside_percent",
+        "inside_overlap_percent",
+        "max_penetration_m",
+        "max_penetration_overlap_m",
         "fps",
         "sequences",
         "frames_scored",
@@ -368,6 +371,22 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
         }
         assert_eq!(rows[method]["sequences"], 1);
     }
+    let simulation = &j["simulation"]["test_motion"];
+    for key in [
+        "inside_percent",
+        "inside_overlap_percent",
+        "max_penetration_m",
+        "max_penetration_overlap_m",
+    ] {
+        assert!(
+            simulation[key].is_number(),
+            "simulation.{key}: {simulation}"
+        );
+    }
+    assert!(
+        simulation["inside_overlap_percent"].as_f64() <= simulation["inside_percent"].as_f64(),
+        "{simulation}"
+    );
     assert!(rows["model"].is_null(), "no model was asked for");
     let e_v = |m: &str| rows[m]["E_v"].as_f64().unwrap();
     for other in ["lbs", "lbs_nearest", "rest"] {
