@@ -18,17 +18,19 @@ pub struct GateResult {
     /// Every value finite.
     pub finite: bool,
     /// Deepest vertex inside the body over all frames, away from where the body overlaps
-    /// itself (the gated figure), m.
+    /// itself (the gated figure), m; NaN (`null`) for an unfinished attempt.
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_penetration_m: f64,
     /// Most vertices inside the body in one frame, away from body overlaps.
     pub max_verts_inside: usize,
     /// Deepest vertex inside the body where it overlaps itself, m (reported, not gated).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "nan_if_null")]
     pub max_penetration_overlap_m: f64,
     /// Most vertices inside the body in one frame where it overlaps itself.
     #[serde(default)]
     pub max_verts_inside_overlap: usize,
-    /// Largest edge stretch.
+    /// Largest edge stretch; NaN (`null`) for an unfinished attempt.
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_edge_stretch: f64,
     /// Most crossing garment triangle pairs in one frame.
     #[serde(default)]
@@ -39,6 +41,11 @@ pub struct GateResult {
     pub passed: bool,
     /// The gates that failed, with measured value and limit.
     pub failed: Vec<String>,
+}
+
+/// A figure JSON wrote as `null` (serde_json's NaN) read back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl GateResult {
@@ -252,4 +259,21 @@ pub fn stats(records: &[ManifestRecord], fps: f64) -> Value {
         "simulation_wall_s": wall,
         "simulated_frames_per_s": if wall > 0.0 { frames as f64 / wall } else { 0.0 },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unfinished_attempt_reads_back_from_its_json() {
+        let gates = GateResult::unfinished("ran out of time".into(), true);
+        let line = serde_json::to_string(&gates).unwrap();
+        assert!(line.contains("\"max_penetration_m\":null"), "{line}");
+        let back: GateResult = serde_json::from_str(&line).unwrap();
+        assert!(back.max_penetration_m.is_nan() && back.max_edge_stretch.is_nan());
+        assert!(back.max_penetration_overlap_m.is_nan());
+        assert_eq!((back.timed_out, back.passed), (true, false));
+        assert_eq!(back.failed, gates.failed);
+    }
 }

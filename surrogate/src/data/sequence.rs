@@ -44,6 +44,10 @@ impl Sequence {
         let meta = r
             .meta
             .ok_or_else(|| fail("the recording has no metadata".into()))?;
+        // The conditions take log10 k_b and scale k_s and rho: a bad value would be NaN there.
+        meta.material
+            .validate()
+            .map_err(|e| fail(format!("the recorded material is unusable: {e}")))?;
         if r.template.uv_triangles.len() != r.template.triangles.len() || r.template.uvs.is_empty()
         {
             return Err(fail("the template has no UVs".into()));
@@ -193,4 +197,45 @@ pub fn roundtrip_floor(
         worst_vertex: worst.1,
         target_mean_cm: 100.0 * magnitude.0 / magnitude.1.max(1) as f64,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recording(k_b: f64) -> Recording {
+        let meta = serde_json::json!({
+            "software": "test", "garment": "g", "motion": "m", "body_model": "default",
+            "betas": [], "fps": 30.0, "frames": 0, "blend_frames": 0, "settle_frames": 0,
+            "material": {"k_s_n_per_m": 100.0, "rho_kg_per_m2": 0.2, "k_b_n_m": 1e-5},
+            "friction": 0.3, "seed": null, "solver": sim::SolverParams::default(),
+            "units": sim::recording::UNITS,
+        });
+        let mut meta: SequenceMeta = serde_json::from_value(meta).unwrap();
+        meta.material.bending = k_b;
+        Recording {
+            meta: Some(meta),
+            template: TemplateArrays {
+                positions: vec![[0.0; 3]; 3],
+                triangles: vec![[0, 1, 2]],
+                uvs: vec![[0.0; 2]; 3],
+                uv_triangles: vec![[0, 1, 2]],
+            },
+            ..Recording::default()
+        }
+    }
+
+    #[test]
+    fn a_recorded_material_that_is_not_positive_is_refused_naming_file_and_key() {
+        assert!(Sequence::from_recording(recording(1e-5), Path::new("ok.mcap")).is_ok());
+        for k_b in [0.0, -1e-5, f64::NAN] {
+            let error = Sequence::from_recording(recording(k_b), Path::new("bad.mcap"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                error.contains("bad.mcap") && error.contains("k_b_n_m"),
+                "{k_b}: {error}"
+            );
+        }
+    }
 }
