@@ -98,6 +98,18 @@ pub enum Error {
         /// What is wrong, naming the key.
         message: String,
     },
+    /// Training diverged: the loss stopped being a finite number.
+    #[error(
+        "training diverged: the loss became {loss} at step {step} (a lower training.lr in {config} may help)"
+    )]
+    Diverged {
+        /// The step whose loss was not finite (1-based).
+        step: usize,
+        /// The loss.
+        loss: f64,
+        /// The configuration the run was started with.
+        config: String,
+    },
     /// Inputs or settings that cannot be used, said in words.
     #[error("{0}")]
     Invalid(String),

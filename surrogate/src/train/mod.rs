@@ -306,12 +306,10 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         let loss = batch.loss(model.forward(noisy, position, mask, time, conditions));
         let loss_value = f64::from(loss.clone().into_scalar::<f32>());
         if !loss_value.is_finite() {
-            return Err(Error::Config {
-                path: config_path.display().to_string(),
-                message: format!(
-                    "the loss became {loss_value} at step {} (lower training.lr?)",
-                    step + 1
-                ),
+            return Err(Error::Diverged {
+                step: step + 1,
+                loss: loss_value,
+                config: config_path.display().to_string(),
             });
         }
         let mut grads = GradientsParams::from_grads(loss.backward(), &model);
