@@ -138,11 +138,12 @@ pub const UNITS: [(&str, &str); 19] = [
 
 impl MethodScores {
     /// The mean of sequences' rows (fps: frames predicted over their summed time; counts
-    /// summed).
+    /// summed; the deepest penetrations their largest).
     pub fn mean(rows: &[MethodScores]) -> MethodScores {
         let n = rows.len().max(1) as f64;
         let scores: Vec<Scores> = rows.iter().map(|r| r.scores).collect();
         let avg = |f: fn(&MethodScores) -> f64| rows.iter().map(f).sum::<f64>() / n;
+        let most = |f: fn(&MethodScores) -> f64| rows.iter().map(f).fold(0.0, f64::max);
         let frames: f64 = rows.iter().map(|r| r.frames_predicted as f64).sum();
         let time: f64 = rows
             .iter()
@@ -154,11 +155,8 @@ impl MethodScores {
             stretch_p99: avg(|r| r.stretch_p99),
             inside_percent: avg(|r| r.inside_percent),
             inside_overlap_percent: avg(|r| r.inside_overlap_percent),
-            max_penetration_m: rows.iter().map(|r| r.max_penetration_m).fold(0.0, f64::max),
-            max_penetration_overlap_m: rows
-                .iter()
-                .map(|r| r.max_penetration_overlap_m)
-                .fold(0.0, f64::max),
+            max_penetration_m: most(|r| r.max_penetration_m),
+            max_penetration_overlap_m: most(|r| r.max_penetration_overlap_m),
             fps: if time > 0.0 { frames / time } else { 0.0 },
             frames_scored: rows.iter().map(|r| r.frames_scored).sum(),
             frames_predicted: rows.iter().map(|r| r.frames_predicted).sum(),
