@@ -3,6 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use surrogate::burn::prelude::Device;
 use surrogate::data::TrainingTensors;
 use surrogate::train::{Event, RunConfig, TrainOptions, train};
 
@@ -55,6 +56,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         config,
         minutes: args.minutes,
         resume: args.resume,
+        device: Device::flex(),
     };
     let bar = ProgressBar::new(options.config.training.steps as u64).with_style(
         ProgressStyle::with_template("training [{bar:30}] {pos}/{len} steps, {msg} (eta {eta})")?

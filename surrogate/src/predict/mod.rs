@@ -462,7 +462,7 @@ impl<'a> Predictor<'a> {
         let plane = r * r;
         let mut targets = garment.targets.clone();
         let (bases, inputs) = self.inputs_of(garment, &mut targets, seq, chunk)?;
-        let device = Device::flex();
+        let device = &self.trained.device;
         let grid = time_grid(settings.steps, settings.shift);
         let targets_stats = &data.normalization.targets;
         let band = settings.guidance.band_m;
@@ -509,7 +509,7 @@ impl<'a> Predictor<'a> {
         let surfaces = &surfaces[..surfaced];
         let repeat =
             |one: &[f32]| -> Vec<f32> { (0..b).flat_map(|_| one.iter().copied()).collect() };
-        let tensor = |values: &[f32]| Tensor::<1>::from_floats(values, &device);
+        let tensor = |values: &[f32]| Tensor::<1>::from_floats(values, device);
         let texel_channels = self.trained.config.model.texel_channels();
         let field = Conditioned {
             model: &self.trained.model,

@@ -84,6 +84,8 @@ pub struct TrainedModel {
     pub model: Dit,
     /// `tensors.json`.
     pub data: TensorManifest,
+    /// The device the network was loaded on, which sampling runs on.
+    pub device: Device,
 }
 
 impl TrainedModel {
@@ -129,14 +131,14 @@ impl TrainedModel {
             config,
             model,
             data,
+            device: device.clone(),
         })
     }
 }
 
-/// Writes the batch's inputs and `model`'s output on them to `path`.
-pub fn save_reference(model: &Dit, batch: &Batch, path: &Path) -> Result<()> {
-    let device = Device::flex();
-    let (noisy, position, mask, time, conditions) = batch.inputs(&device);
+/// Writes the batch's inputs and `model`'s output on them (run on `device`) to `path`.
+pub fn save_reference(model: &Dit, batch: &Batch, path: &Path, device: &Device) -> Result<()> {
+    let (noisy, position, mask, time, conditions) = batch.inputs(device);
     let output = model.forward(
         noisy.clone(),
         position.clone(),

@@ -84,6 +84,8 @@ pub struct TrainOptions {
     pub minutes: Option<f64>,
     /// Continue the run in `out` from its last checkpoint.
     pub resume: bool,
+    /// The device to train on (its autodiff twin takes the gradients).
+    pub device: Device,
 }
 
 /// What training reports as it goes.
@@ -128,12 +130,11 @@ impl RunConfig {
     }
 }
 
-/// The weighted validation loss of `model` over `batches`.
-fn validation_loss(model: &Dit, batches: &[Batch]) -> Option<f64> {
-    let device = Device::flex();
+/// The weighted validation loss of `model` over `batches`, run on `device`.
+fn validation_loss(model: &Dit, batches: &[Batch], device: &Device) -> Option<f64> {
     let (mut sum, mut weight) = (0.0, 0.0);
     for b in batches {
-        let (noisy, position, mask, time, conditions) = b.inputs(&device);
+        let (noisy, position, mask, time, conditions) = b.inputs(device);
         let loss = b.loss(model.forward(noisy, position, mask, time, conditions));
         let w: f64 = b.weight.iter().map(|&w| f64::from(w)).sum();
         sum += f64::from(loss.into_scalar::<f32>()) * w;
@@ -260,7 +261,8 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let recipe = Recipe::new(&config.model, t);
     let val_batches = validation_batches(&tensors, &val_frames, t, recipe);
 
-    let device = Device::flex().autodiff();
+    let plain = &options.device;
+    let device = plain.clone().autodiff();
     device.seed(t.seed);
     let loaded = if options.resume {
         checkpoint::load(run, &config, &device)?
@@ -327,7 +329,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         let done = state.step;
         if done % t.log_every == 0 || done == t.steps {
             let val_loss = (done % t.val_every == 0 || done == t.steps)
-                .then(|| validation_loss(&ema, &val_batches))
+                .then(|| validation_loss(&ema, &val_batches, plain))
                 .flatten();
             if let Some(v) = val_loss {
                 state.best_val_loss = Some(state.best_val_loss.map_or(v, |b: f64| b.min(v)));
@@ -368,7 +370,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     }
     save_weights(&ema, &run.join("model.safetensors"))?;
     let reference = reference_batch(&tensors, &train_frames, &val_frames, t, recipe);
-    save_reference(&ema, &reference, &run.join("reference.safetensors"))?;
+    save_reference(&ema, &reference, &run.join("reference.safetensors"), plain)?;
     let summary = Summary {
         steps: state.step,
         parameters,
