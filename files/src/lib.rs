@@ -7,15 +7,25 @@
 //! [`check_destination`] refuses, before any work, an output path that is anything but a
 //! regular file or nothing.
 //!
+//! [`write_atomic`] and [`write_with`] are that for whole outputs, [`read_json_lines`] and
+//! [`write_json_lines`] for JSON Lines, [`sha256_file`] and [`read_verified`] for the checksums
+//! manifests record.
+//!
 //! Written by hand: the standard library has the pieces, no crate puts these checks together.
 
+mod checksum;
 mod destination;
+mod lines;
 mod read;
 mod temporary;
+mod write;
 
+pub use checksum::{read_verified, sha256_file, sha256_hex};
 pub use destination::{Kind, check_destination, check_folder_destination};
+pub use lines::{read_json_lines, write_json_lines};
 pub use read::{open, open_bounded, read, read_to_string};
 pub use temporary::{Temporary, remove_temporaries, temporary_name};
+pub use write::{write_atomic, write_with};
 
 use std::path::PathBuf;
 
@@ -57,6 +67,24 @@ pub enum Error {
         path: PathBuf,
         /// What is there.
         kind: Kind,
+    },
+    /// The file's SHA-256 is not the one recorded for it.
+    #[error("{path}: does not match {recorded_by}'s checksum (damaged or replaced)")]
+    Checksum {
+        /// The file.
+        path: PathBuf,
+        /// What recorded the checksum (a manifest, a checkpoint's checksums file).
+        recorded_by: String,
+    },
+    /// An entry of a JSON Lines file does not parse.
+    #[error("{path} line {line}: not a valid entry: {problem}")]
+    Entry {
+        /// The file.
+        path: PathBuf,
+        /// Its line, from 1.
+        line: usize,
+        /// What the parser said.
+        problem: String,
     },
     /// The process is stopping on a signal; no new temporary is started.
     #[error("stopping on a signal")]

@@ -12,7 +12,7 @@ use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
 use crate::cli::DatasetCommand;
-use crate::dataset_dir::{DatasetDir, finished_record, read_jsonl, sha256_file, write_jsonl};
+use crate::dataset_dir::{DatasetDir, finished_record};
 use crate::output::write_json;
 
 pub fn run(command: DatasetCommand) -> Result<()> {
@@ -70,7 +70,8 @@ fn tensors(
     quiet: bool,
 ) -> Result<()> {
     let model = crate::inputs::body_model(model)?;
-    let records: Vec<ManifestRecord> = read_jsonl(&DatasetDir::new(dir).manifest())?;
+    let records: Vec<ManifestRecord> =
+        files::read_json_lines(&DatasetDir::new(dir).manifest(), "dataset manifest")?;
     let total = records.iter().filter(|r| r.ok()).count();
     let bar = ProgressBar::new(total as u64).with_style(
         ProgressStyle::with_template("tensors [{bar:30}] {pos}/{len} sequences (eta {eta})")?
@@ -108,14 +109,14 @@ fn tensors(
 
 fn load(dir: &DatasetDir) -> Result<(DatasetSpec, Vec<PlannedSequence>, Vec<ManifestRecord>)> {
     let spec = DatasetSpec::load(&dir.spec())?;
-    let planned: Vec<PlannedSequence> = read_jsonl(&dir.plan())?;
+    let planned: Vec<PlannedSequence> = files::read_json_lines(&dir.plan(), "dataset plan")?;
     if !dir.manifest().exists() {
         bail!(
             "{} has no manifest.jsonl: the run is unfinished, or its shards are not merged (`dataset merge`)",
             dir.root.display()
         );
     }
-    let records: Vec<ManifestRecord> = read_jsonl(&dir.manifest())?;
+    let records: Vec<ManifestRecord> = files::read_json_lines(&dir.manifest(), "dataset manifest")?;
     Ok((spec, planned, records))
 }
 
@@ -176,7 +177,7 @@ fn check_record(
         return problems;
     };
     let path = dir.root.join(file);
-    match sha256_file(&path) {
+    match files::sha256_file(&path) {
         Err(e) => {
             problem(format!("recording {file} is unreadable: {e:#}"));
             return problems;
@@ -380,7 +381,7 @@ fn merge(out: &Path, roots: &[std::path::PathBuf]) -> Result<()> {
             );
         }
     }
-    let planned: Vec<PlannedSequence> = read_jsonl(&dirs[0].plan())?;
+    let planned: Vec<PlannedSequence> = files::read_json_lines(&dirs[0].plan(), "dataset plan")?;
     // Find every planned sequence's finished record before writing anything.
     let mut found = Vec::with_capacity(planned.len());
     let mut missing = Vec::new();
@@ -424,7 +425,7 @@ fn merge(out: &Path, roots: &[std::path::PathBuf]) -> Result<()> {
         copy_into(&d.record(&r.id), &target.record(&r.id))?;
         records.push(r);
     }
-    write_jsonl(&target.manifest(), &records)?;
+    files::write_json_lines(&target.manifest(), &records)?;
     println!(
         "merge: {} sequences from {} folders into {}",
         records.len(),

@@ -21,7 +21,7 @@ use surrogate::predict::{BodySequence, Guidance, Predictor, Settings};
 use surrogate::train::TrainedModel;
 
 use crate::cli::EvaluateArgs;
-use crate::dataset_dir::{DatasetDir, read_jsonl, sha256_file};
+use crate::dataset_dir::DatasetDir;
 use crate::inputs;
 use crate::output::write_json;
 use crate::prediction::model_dir;
@@ -56,7 +56,7 @@ fn evaluate_one(c: &EvalContext, record: &ManifestRecord) -> Result<SequenceResu
         .with_context(|| format!("sequence {} has no recording", record.id))?;
     let path = c.data.join(file);
     if let Some(expected) = &record.sha256 {
-        let (sha, _) = sha256_file(&path)?;
+        let (sha, _) = files::sha256_file(&path)?;
         if &sha != expected {
             bail!(
                 "{}: does not match the manifest's checksum (damaged or replaced)",
@@ -191,7 +191,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
 
     let dir = DatasetDir::new(&args.data);
     let manifest = dir.manifest();
-    let all: Vec<ManifestRecord> = read_jsonl(&manifest)
+    let all: Vec<ManifestRecord> = files::read_json_lines(&manifest, "dataset manifest")
         .with_context(|| format!("reading the dataset in {}", args.data.display()))?;
     let mut records = Vec::new();
     let mut splits_asked: Vec<&String> = Vec::new();
@@ -229,7 +229,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     }
     let weights = trained
         .as_ref()
-        .map(|t| sha256_file(&t.run.join("model.safetensors")))
+        .map(|t| files::sha256_file(&t.run.join("model.safetensors")))
         .transpose()?
         .map(|(sha, _)| sha);
     let model_json = match &trained {

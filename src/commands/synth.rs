@@ -25,7 +25,7 @@ use sim::scene::BodyAttachment;
 use sim::{SceneConfig, SolverParams};
 
 use crate::cli::SynthArgs;
-use crate::dataset_dir::{DatasetDir, finished_record, sha256_file, write_jsonl};
+use crate::dataset_dir::{DatasetDir, finished_record};
 use crate::inputs;
 use crate::output::{write_atomic, write_json};
 use crate::run::{RecordOptions, is_deadline, prepare_with, record};
@@ -194,7 +194,7 @@ fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
     let last = attempts.last().expect("at least one attempt");
     let ok = last.gates.passed;
     let (file, sha256, bytes) = if path.exists() {
-        let (sha, bytes) = sha256_file(&path)?;
+        let (sha, bytes) = files::sha256_file(&path)?;
         (Some(file), Some(sha), bytes)
     } else {
         (None, None, 0)
@@ -265,7 +265,7 @@ fn write_manifest(
         }
     }
     if missing == 0 {
-        write_jsonl(&dir.manifest(), &records)?;
+        files::write_json_lines(&dir.manifest(), &records)?;
     }
     Ok(missing)
 }
@@ -324,7 +324,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     std::fs::create_dir_all(&dir.root)
         .with_context(|| format!("cannot create {}", dir.root.display()))?;
     store_spec(&dir, &spec)?;
-    write_jsonl(&dir.plan(), &planned)?;
+    files::write_json_lines(&dir.plan(), &planned)?;
     let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
     let leftovers = remove_leftovers(&dir, &ids)?;
     // Finished sequences (checked against their checksums once) and the rest.

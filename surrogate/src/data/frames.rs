@@ -54,16 +54,16 @@ impl Frames {
     }
 }
 
-/// Reads `path` and checks it against `sha256` (hex).
+/// Reads a tensor file and checks it against `sha256` (hex), the manifest's.
 fn read_checked(path: &Path, sha256: &str) -> Result<Vec<u8>> {
-    let bytes = files::read(path, files::limits::TENSORS, "tensor file")?;
-    if super::sha256_hex(&bytes) != sha256 {
-        return Err(file_error(
-            path,
-            "does not match the manifest's checksum (damaged or replaced)",
-        ));
-    }
-    Ok(bytes)
+    let limit = files::limits::TENSORS;
+    Ok(files::read_verified(
+        path,
+        limit,
+        "tensor file",
+        sha256,
+        "the manifest",
+    )?)
 }
 
 /// A named tensor of the given dtype and shape as little-endian values.

@@ -7,8 +7,6 @@ mod frames;
 mod sequence;
 mod tensors;
 
-pub(crate) use tensors::sha256_hex;
-
 pub use conditions::{
     Block, BlockScaling, CONDITION_JOINTS, ConditionLayout, ConditionScaling, VELOCITIES,
 };

@@ -12,7 +12,6 @@ use motions::BodyModel;
 use rayon::prelude::*;
 use safetensors::tensor::{Dtype, TensorView};
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use sim::dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
 use sim::recording::{Recording, TemplateArrays};
 
@@ -242,19 +241,10 @@ fn i64_bytes(values: impl Iterator<Item = usize>) -> Vec<u8> {
     values.flat_map(|v| (v as i64).to_le_bytes()).collect()
 }
 
-/// Writes `bytes` to `path` through a temporary name, so a stopped run leaves no half file.
+/// Writes `bytes` to `path` atomically and returns their SHA-256 for the manifest.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<String> {
-    use std::io::Write;
-    let (tmp, mut file) = files::Temporary::create(path)?;
-    file.write_all(bytes)
-        .map_err(|e| file_error(tmp.path(), e))?;
-    tmp.persist()?;
-    Ok(sha256_hex(bytes))
-}
-
-/// The SHA-256 of `bytes` as lowercase hex (manifests, tensor shards, checkpoints).
-pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
-    format!("{:x}", Sha256::digest(bytes))
+    files::write_atomic(path, bytes)?;
+    Ok(files::sha256_hex(bytes))
 }
 
 /// Serializes named tensors (f32 or i64 little-endian bytes with their shapes).
@@ -304,19 +294,8 @@ fn body_stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
 /// then parsed.
 fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
     let path = dir.join("manifest.jsonl");
-    let text = files::read_to_string(&path, files::limits::LINES, "dataset manifest")?;
-    let mut records = Vec::new();
-    for (i, line) in text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-    {
-        let r: ManifestRecord = serde_json::from_str(line)
-            .map_err(|e| file_error(&path, format!("line {}: {e}", i + 1)))?;
-        if r.ok() {
-            records.push(r);
-        }
-    }
+    let mut records: Vec<ManifestRecord> = files::read_json_lines(&path, "dataset manifest")?;
+    records.retain(ManifestRecord::ok);
     records
         .into_par_iter()
         .map(|r| {
@@ -328,13 +307,13 @@ fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
                 ));
             };
             let seq = dir.join(file);
-            let bytes = files::read(&seq, files::limits::RECORDING, "recording")?;
-            if &sha256_hex(&bytes) != sha {
-                return Err(file_error(
-                    &seq,
-                    "does not match the manifest's checksum (damaged or replaced)",
-                ));
-            }
+            let bytes = files::read_verified(
+                &seq,
+                files::limits::RECORDING,
+                "recording",
+                sha,
+                "the manifest",
+            )?;
             let sequence = Sequence::from_recording(Recording::from_bytes(&bytes, &seq)?, &seq)?;
             Ok((r, seq, sequence))
         })

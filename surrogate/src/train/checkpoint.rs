@@ -11,9 +11,9 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::config::{RunConfig, TrainConfig};
-use crate::data::sha256_hex;
 use crate::error::{Result, file_error};
 use crate::model::Dit;
+use files::{sha256_hex, write_atomic};
 
 /// The counters a resumed run continues from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -31,15 +31,6 @@ pub struct RunState {
 struct Pointer {
     step: usize,
     dir: String,
-}
-
-/// Writes `bytes` to `path` through a temporary name.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    use std::io::Write;
-    let (tmp, mut file) = files::Temporary::create(path)?;
-    file.write_all(bytes)
-        .map_err(|e| file_error(tmp.path(), e))?;
-    Ok(tmp.persist()?)
 }
 
 /// AdamW as the run's configuration sets it (eps and weight decay explicit: burn's defaults

@@ -10,7 +10,6 @@ use burn::store::{BurnToPyTorchAdapter, ModuleSnapshot, PyTorchToBurnAdapter, Sa
 use safetensors::tensor::{Dtype, TensorView};
 
 use super::batch::Batch;
-use super::checkpoint::write_atomic;
 use super::config::RunConfig;
 use crate::data::TensorManifest;
 use crate::error::{Result, file_error};
@@ -181,7 +180,7 @@ pub fn save_reference(model: &Dit, batch: &Batch, path: &Path, device: &Device) 
         })
         .collect::<Result<Vec<_>>>()?;
     let serialized = safetensors::serialize(views, None).map_err(|e| file_error(path, e))?;
-    write_atomic(path, &serialized)
+    Ok(files::write_atomic(path, &serialized)?)
 }
 
 fn bytes<E: std::fmt::Debug>(values: std::result::Result<Vec<f32>, E>) -> Vec<u8> {

@@ -22,9 +22,10 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use batch::{Batch, Recipe, generator, normal, validation_batches};
-pub use checkpoint::{RunState, write_atomic};
+pub use checkpoint::RunState;
 pub use config::{Objective, RunConfig, TimeSampling, TrainConfig};
 pub use export::{TENSORS_MANIFEST, TrainedModel, load_run, save_reference, save_weights};
+use files::write_atomic;
 pub use optim::{clip_global_norm, ema_decay, update_ema};
 
 use crate::data::TrainingTensors;
@@ -148,7 +149,7 @@ fn write_log(run: &Path, log: &[LogLine]) -> Result<()> {
         .iter()
         .map(|l| serde_json::to_string(l).expect("a log line serializes") + "\n")
         .collect();
-    write_atomic(&run.join("log.jsonl"), text.as_bytes())
+    Ok(write_atomic(&run.join("log.jsonl"), text.as_bytes())?)
 }
 
 fn read_log(run: &Path, up_to: usize) -> Result<Vec<LogLine>> {
@@ -157,20 +158,8 @@ fn read_log(run: &Path, up_to: usize) -> Result<Vec<LogLine>> {
         return Ok(Vec::new());
     }
     // An unreadable log is an error: resuming without it would erase the run's history.
-    let text = files::read_to_string(&path, files::limits::LINES, "training log")?;
-    let mut log = Vec::new();
-    for (i, line) in text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-    {
-        let l: LogLine = serde_json::from_str(line)
-            .map_err(|e| file_error(&path, format!("line {}: {e}", i + 1)))?;
-        if l.step <= up_to {
-            log.push(l);
-        }
-    }
-    Ok(log)
+    let log: Vec<LogLine> = files::read_json_lines(&path, "training log")?;
+    Ok(log.into_iter().filter(|l| l.step <= up_to).collect())
 }
 
 /// Draws `loss.png`: training and validation loss against step.
@@ -197,7 +186,7 @@ fn plot(run: &Path, log: &[LogLine]) -> Result<()> {
         .map_err(|e| file_error(&path, e))?;
     let mut bytes = Vec::new();
     render::write_png(&mut bytes, &image).map_err(|e| file_error(&path, e))?;
-    write_atomic(&path, &bytes)
+    Ok(write_atomic(&path, &bytes)?)
 }
 
 /// Trains (or resumes) a run; `progress` hears every step and log line.
