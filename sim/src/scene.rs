@@ -17,7 +17,7 @@ use crate::config::SceneConfig;
 use crate::error::{Error, Result};
 use crate::obstacles::{AnimatedMesh, Obstacles, Plane};
 use crate::params::{Material, SolverParams};
-use crate::recording::{FrameRecord, SequenceMeta, UNITS};
+use crate::recording::{FrameRecord, FrameStats, SequenceMeta, UNITS};
 use crate::solver::{ClothSetup, FrameReport, Solver, StageTimes};
 
 /// Output frame rate, frames per second.
@@ -158,41 +158,6 @@ fn attachment_targets(
     faces: &[[u32; 3]],
 ) -> Vec<Vec3> {
     attachments.iter().map(|a| a.target(body, faces)).collect()
-}
-
-/// Statistics of one output frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct FrameStats {
-    /// Frame index (0 = the template on the canonical body).
-    pub frame: usize,
-    /// Solver report of the frame's steps.
-    #[serde(flatten)]
-    pub solver: FrameReport,
-    /// Deepest cloth vertex inside the body at the end of the frame, away from where the
-    /// body overlaps itself, m (0 if none).
-    pub max_penetration_m: f64,
-    /// Cloth vertices inside the body at the end of the frame, away from body overlaps.
-    pub vertices_inside: usize,
-    /// Deepest cloth vertex inside the body where the body overlaps itself, m (0 if none;
-    /// `sim::obstacles::split_penetration`).
-    #[serde(default)]
-    pub max_penetration_overlap_m: f64,
-    /// Cloth vertices inside the body where the body overlaps itself.
-    #[serde(default)]
-    pub vertices_inside_overlap: usize,
-    /// Largest edge length / rest length.
-    pub max_edge_stretch: f64,
-    /// Mean edge length / rest length.
-    pub mean_edge_stretch: f64,
-    /// Pairs of garment triangles (sharing no vertex) that cross each other.
-    #[serde(default)]
-    pub self_intersections: usize,
-    /// Kinetic energy, J.
-    pub kinetic_energy_j: f64,
-    /// Wall time of the frame, s. Not recorded: a recording holds only what the inputs
-    /// determine, so simulating its configuration again gives the same bytes.
-    #[serde(default, skip_serializing)]
-    pub wall_s: f64,
 }
 
 /// One output frame handed to the caller.

@@ -12,12 +12,13 @@ use std::ops::Range;
 
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
-use super::reader::MAGIC;
-
 /// The largest record or decompressed chunk a recording may hold: our writer's chunks are
 /// 4 MiB, so anything past this (or past a few times the file's size) is a damaged length
 /// field, refused before the reader reserves memory for it.
 const RECORD_LIMIT_BYTES: usize = 64 << 20;
+
+/// The bytes an MCAP file starts and ends with.
+pub(super) const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 const CHANNEL_OPCODE: u8 = 0x04;
 const MESSAGE_OPCODE: u8 = 0x05;

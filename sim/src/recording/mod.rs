@@ -7,9 +7,11 @@
 mod foxglove;
 mod mcap_read;
 mod reader;
+mod stats;
 mod writer;
 
 pub use reader::Recording;
+pub use stats::FrameStats;
 pub use writer::{Channels, FrameRecord, SequenceWriter};
 
 use serde::{Deserialize, Serialize};

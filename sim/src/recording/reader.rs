@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use super::mcap_read::messages;
+use super::FrameStats;
+use super::mcap_read::{MAGIC, messages};
 use super::*;
 use crate::error::{Error, Result};
-use crate::scene::FrameStats;
 
 /// A recording read back.
 #[derive(Debug, Clone, Default)]
@@ -26,8 +26,6 @@ pub struct Recording {
     /// Statistics per frame.
     pub stats: Vec<FrameStats>,
 }
-
-pub(super) const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 impl Recording {
     /// Reads a whole recording; truncated or foreign files get an error naming the file.

@@ -8,10 +8,10 @@ use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions};
 use serde::Serialize;
 
+use super::FrameStats;
 use super::foxglove::{FOXGLOVE_SCENE_SCHEMA, FoxgloveScene, foxglove_entity};
 use super::*;
 use crate::error::{Error, Result};
-use crate::scene::FrameStats;
 
 const META_SCHEMA: &str = r#"{"title": "dit_garment.SequenceMeta", "type": "object", "description": "see docs/FORMATS.md"}"#;
 const POSE_SCHEMA: &str = r#"{"title": "dit_garment.BodyPose", "type": "object", "properties": {"frame": {"type": "integer", "description": "frame index from 0"}, "time_s": {"type": "number", "description": "seconds since the first frame"}, "pose": {"type": "array", "items": {"type": "number"}, "minItems": 72, "maxItems": 72, "description": "SMPL axis-angle pose, radians: global_orient (3) then body_pose (69)"}, "transl": {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3, "description": "root translation, metres"}, "betas": {"type": "array", "items": {"type": "number"}, "description": "body shape of the frame (ramped during a blend-in)"}}, "required": ["frame", "time_s", "pose", "transl"]}"#;
