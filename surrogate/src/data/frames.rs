@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use safetensors::SafeTensors;
 use safetensors::tensor::Dtype;
 
-use super::tensors::{Stats, TensorManifest};
+use super::tensors::TensorManifest;
 use crate::error::{Result, file_error};
 
 /// A tensors folder: its manifest and its templates, normalized.
@@ -110,16 +110,6 @@ fn indices(bytes: &[u8], bound: usize, name: &str, path: &Path) -> Result<Vec<us
         .collect()
 }
 
-/// `(x - mean_c) / std_c` over `[.., C, plane]` blocks.
-pub(crate) fn normalize_channels(values: &mut [f32], stats: &Stats, plane: usize) {
-    let channels = stats.mean.len();
-    for (k, chunk) in values.chunks_mut(plane).enumerate() {
-        let c = k % channels;
-        let (m, s) = (stats.mean[c] as f32, stats.std[c] as f32);
-        chunk.iter_mut().for_each(|v| *v = (*v - m) / s);
-    }
-}
-
 impl TrainingTensors {
     /// Opens a tensors folder: reads and checks the manifest and `templates.safetensors`.
     pub fn open(dir: &Path) -> Result<Self> {
@@ -146,7 +136,7 @@ impl TrainingTensors {
             &[g, 3, r, r],
             &path,
         )?);
-        normalize_channels(&mut position_maps, &n.position_maps, r * r);
+        n.position_maps.normalize(&mut position_maps, r * r);
         let masks = f32s(tensor_bytes(
             &file,
             "masks",
@@ -191,7 +181,7 @@ impl TrainingTensors {
                 &[f, d],
                 &path,
             )?);
-            normalize_channels(&mut conditions, &m.normalization.conditions, 1);
+            m.normalization.conditions.normalize(&mut conditions, 1);
             let mut targets = f32s(tensor_bytes(
                 &file,
                 "targets",
@@ -199,7 +189,7 @@ impl TrainingTensors {
                 &[f, 3, r, r],
                 &path,
             )?);
-            normalize_channels(&mut targets, &m.normalization.targets, r * r);
+            m.normalization.targets.normalize(&mut targets, r * r);
             if let Some(stats) = &m.normalization.bodies {
                 let mut bodies = f32s(tensor_bytes(
                     &file,
@@ -208,7 +198,7 @@ impl TrainingTensors {
                     &[f, crate::model::BODY_CHANNELS, r, r],
                     &path,
                 )?);
-                normalize_channels(&mut bodies, stats, r * r);
+                stats.normalize(&mut bodies, r * r);
                 out.bodies.extend(bodies);
             }
             let index = |name: &str, bound: usize| {

@@ -10,7 +10,6 @@ mod tensors;
 pub use conditions::{
     Block, BlockScaling, CONDITION_JOINTS, ConditionLayout, ConditionScaling, VELOCITIES,
 };
-pub(crate) use frames::normalize_channels;
 pub use frames::{Frames, TrainingTensors};
 pub use sequence::{Floor, Sequence, roundtrip_floor};
 pub(crate) use tensors::channels_first;

@@ -24,7 +24,7 @@ use sim::Material;
 use sim::obstacles::MeshSurface;
 use sim::recording::TemplateArrays;
 
-use crate::data::{ConditionLayout, body_input_maps, channels_first, normalize_channels};
+use crate::data::{ConditionLayout, body_input_maps, channels_first};
 use crate::error::{Error, Result};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
 use crate::sample::{Conditioned, euler, time_grid};
@@ -220,14 +220,6 @@ pub struct Predictor<'a> {
     layout: ConditionLayout,
 }
 
-/// Channels-first f32 `[3, R, R]` as channels-last texels, un-normalized by `mean`/`std`.
-fn texels(values: &[f32], mean: &[f64], std: &[f64]) -> Vec<[f64; 3]> {
-    let plane = values.len() / 3;
-    (0..plane)
-        .map(|k| std::array::from_fn(|c| values[c * plane + k] as f64 * std[c] + mean[c]))
-        .collect()
-}
-
 /// The posed bodies of frames, shaping only when the shape changes.
 fn posed_bodies(
     model: &BodyModel,
@@ -303,11 +295,9 @@ impl<'a> Predictor<'a> {
             data.root,
         )?;
         let mut position = channels_first(&image.encode(&template.positions)?);
-        normalize_channels(
-            &mut position,
-            &data.normalization.position_maps,
-            image.resolution().pow(2),
-        );
+        data.normalization
+            .position_maps
+            .normalize(&mut position, image.resolution().pow(2));
         let mask = image.loss_mask().iter().map(|&m| m as u8 as f32).collect();
         let weights = image.read_transpose(&vec![[1.0; 3]; image.vertices()])?;
         let spread = weights
@@ -430,18 +420,15 @@ impl<'a> Predictor<'a> {
                 let before = body_of(k.saturating_sub(1));
                 let mut maps =
                     body_input_maps(targets, &garment.image, self.body, body_of(k), before)?;
-                normalize_channels(&mut maps, bodies, plane);
+                bodies.normalize(&mut maps, plane);
                 inputs.texels.extend(maps);
             }
             let c = self
                 .layout
                 .vector(seq.motion, k, &seq.betas[k], &seq.material)?;
-            let (m, s) = (&stats.conditions.mean, &stats.conditions.std);
-            inputs.conditions.extend(
-                c.iter()
-                    .enumerate()
-                    .map(|(d, &x)| (x as f32 - m[d] as f32) / s[d] as f32),
-            );
+            let mut c: Vec<f32> = c.iter().map(|&x| x as f32).collect();
+            stats.conditions.normalize(&mut c, 1);
+            inputs.conditions.extend(c);
         }
         Ok((bases, inputs))
     }
@@ -536,7 +523,7 @@ impl<'a> Predictor<'a> {
                     .zip(correction.chunks_mut(3 * plane))
                     .zip(bases.iter().zip(surfaces).zip(known.iter_mut()))
                 {
-                    let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                    let map = targets_stats.denormalize::<3>(z);
                     let world = base.decode(&image.read(&map).ok()?);
                     let gradient: Vec<[f64; 3]> =
                         penalty_gradient(cache.clearances(surface, &world, band), band)
@@ -596,7 +583,7 @@ impl<'a> Predictor<'a> {
             .zip(known.iter_mut())
             .enumerate()
             .map(|(i, (((z, base), (&index, body)), cache))| {
-                let map = texels(z, &targets_stats.mean, &targets_stats.std);
+                let map = targets_stats.denormalize::<3>(z);
                 let mut world = base.decode(&image.read(&map)?);
                 let (mut inside, mut max_penetration_m, mut pushed) = (None, None, 0);
                 if tests_after {
