@@ -526,10 +526,11 @@ pub struct ViewArgs {
 /// Where the body comes from and its shape.
 #[derive(Debug, Args)]
 pub struct ModelArgs {
-    /// SMPL-format .npz model file (SMPL_NEUTRAL.npz ...); the licence-free default body if
-    /// omitted.
-    #[arg(long)]
-    pub model: Option<PathBuf>,
+    /// SMPL-format .npz body model file (SMPL_NEUTRAL.npz ...); the licence-free default body
+    /// if omitted. Named as in `predict` and `evaluate`, where `--model` is the trained network
+    /// (`--model` is still accepted here, unlisted).
+    #[arg(long = "body-model", alias = "model")]
+    pub body_model: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]

@@ -54,7 +54,7 @@ pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     if let Some(v) = &args.motion {
         c.motion = v.clone();
     }
-    if let Some(v) = &args.model.model {
+    if let Some(v) = &args.model.body_model {
         c.model = Some(v.display().to_string());
     }
     if let Some(v) = &args.betas {

@@ -380,7 +380,7 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
     let obj = dir.path().join("x.obj");
     let err = fails(&[
         "body",
-        "--model",
+        "--body-model",
         "/no/such/SMPL.npz",
         "--out",
         obj.to_str().unwrap(),
@@ -388,6 +388,7 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
     assert!(err.contains("/no/such/SMPL.npz"), "{err}");
     let pkl = dir.path().join("SMPL_MALE.pkl");
     std::fs::write(&pkl, [0x80u8, 0x02, 0x7d]).unwrap();
+    // `--model`, the flag's old name, still works where it means the body model.
     let err = fails(&[
         "body",
         "--model",

@@ -12,7 +12,7 @@ pub fn run(args: &BodyArgs) -> Result<()> {
     if args.out.is_none() && args.json.is_none() {
         bail!("nothing to write: give --out FILE.obj and/or --json FILE");
     }
-    let model = inputs::body_model(args.model.model.as_deref())?;
+    let model = inputs::body_model(args.model.body_model.as_deref())?;
     let params = match &args.params {
         Some(p) => BodyParams::load(p)?,
         None => BodyParams::default(),

@@ -37,7 +37,7 @@ fn values(s: &Scores) -> [f64; 9] {
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {
-    let model = inputs::body_model(args.model.model.as_deref())?;
+    let model = inputs::body_model(args.model.body_model.as_deref())?;
     let c = score(&args.a, &args.b, &model, args.seed)?;
     if args.per_frame {
         for (k, s) in &c.per_frame {

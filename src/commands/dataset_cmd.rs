@@ -56,7 +56,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 conditions: ConditionScaling::parse(&conditions).context("unknown --conditions")?,
                 ..TensorOptions::default()
             };
-            tensors(&dir, &out, model.model.as_deref(), &options, quiet)
+            tensors(&dir, &out, model.body_model.as_deref(), &options, quiet)
         }
     }
 }

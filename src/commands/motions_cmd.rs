@@ -17,7 +17,7 @@ pub fn run(command: MotionsCommand) -> Result<()> {
             motion,
             model,
             json,
-        } => show(&motion, model.model.as_deref(), json.as_deref()),
+        } => show(&motion, model.body_model.as_deref(), json.as_deref()),
         MotionsCommand::Export {
             motion,
             out,
@@ -36,7 +36,7 @@ pub fn run(command: MotionsCommand) -> Result<()> {
                     "{flag} {value}: at most {MAX_PREFIX_FRAMES} (an hour at 30 fps)"
                 );
             }
-            let model = inputs::body_model(model.model.as_deref())?;
+            let model = inputs::body_model(model.body_model.as_deref())?;
             let shaped = model.shape(&betas)?;
             let mut m = inputs::motion(&motion, &model, &shaped)?;
             if blend_frames + settle_frames > 0 {

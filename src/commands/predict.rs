@@ -59,7 +59,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         garment: args.garment.clone(),
         motion: args.motion.clone(),
         model: ModelArgs {
-            model: args.body_model.clone(),
+            body_model: args.body_model.clone(),
         },
         betas: args.betas.clone(),
         material: args.material.clone(),

@@ -55,7 +55,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.color_by.is_none() && (args.against.is_some() || range.is_some()) {
         bail!("--against and --range need --color-by");
     }
-    let model = inputs::body_model(args.model.model.as_deref())?;
+    let model = inputs::body_model(args.model.body_model.as_deref())?;
     let job = RenderJob {
         frames: &args.frames,
         views: &views,
@@ -95,7 +95,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 }
 
 pub fn view(args: &ViewArgs) -> Result<()> {
-    let model = inputs::body_model(args.model.model.as_deref())?;
+    let model = inputs::body_model(args.model.body_model.as_deref())?;
     let started = Instant::now();
     write_view(
         &args.recordings,

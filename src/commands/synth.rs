@@ -297,7 +297,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     // Everything the spec names is checked before the folder is touched, so a refused spec
     // (a typo in a motion or garment, another spec's folder) leaves the folder as it was.
     check_spec(&dir, &spec)?;
-    let model = Arc::new(inputs::body_model(args.model.model.as_deref())?);
+    let model = Arc::new(inputs::body_model(args.model.body_model.as_deref())?);
     let neutral = model.shape(&[])?;
     for (source, _) in &motions {
         inputs::motion(source, &model, &neutral)
@@ -361,7 +361,11 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         spec: &spec,
         dir: &dir,
         model,
-        model_file: args.model.model.as_ref().map(|m| m.display().to_string()),
+        model_file: args
+            .model
+            .body_model
+            .as_ref()
+            .map(|m| m.display().to_string()),
         templates,
         software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
     };
