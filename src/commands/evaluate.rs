@@ -15,6 +15,7 @@ use sim::dataset::ManifestRecord;
 use surrogate::burn::prelude::Device;
 use surrogate::data::Sequence;
 use surrogate::evaluate::baselines::{self, Baseline, FloorMaps};
+use surrogate::evaluate::tables::{SequenceResult, aggregate, paper_numbers};
 use surrogate::evaluate::{Method, Truth, UNITS};
 use surrogate::geometry::{RootRemoval, TargetKind};
 use surrogate::predict::{BodySequence, Guidance, Predictor, Settings};
@@ -25,7 +26,7 @@ use crate::dataset_dir::DatasetDir;
 use crate::inputs;
 use crate::output::write_json;
 use crate::prediction::model_dir;
-use crate::report::{self, Pictures, SequenceResult, aggregate};
+use crate::report::{self, Pictures};
 use crate::run::set_threads;
 
 /// What evaluating a sequence needs.
@@ -317,7 +318,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         "model": model_json,
         "settings": settings_json,
         "units": units,
-        "paper": report::paper_numbers(),
+        "paper": paper_numbers(),
     });
     if let Some(path) = &args.json {
         write_json(path, &output)?;

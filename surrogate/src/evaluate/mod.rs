@@ -9,6 +9,7 @@
 //! jitter over all motion frames.
 
 pub mod baselines;
+pub mod tables;
 
 use serde::{Deserialize, Serialize};
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores, jitter};
