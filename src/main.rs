@@ -4,7 +4,6 @@
 
 mod cli;
 mod commands;
-mod dataset_dir;
 mod inputs;
 mod output;
 mod pictures;

@@ -170,6 +170,14 @@ pub enum Error {
         /// What is wrong (naming the key).
         message: String,
     },
+    /// A dataset folder is incomplete.
+    #[error("dataset {path}: {message}")]
+    Dataset {
+        /// The folder.
+        path: String,
+        /// What is missing.
+        message: String,
+    },
     /// A dataset spec is unreadable or invalid.
     #[error("dataset spec {path}: {message}")]
     Spec {

@@ -1,18 +1,17 @@
 //! `dit-garment dataset verify | stats | merge`: checking, summarizing and merging dataset
 //! folders written by `synth` (layout in `synth.rs` and docs/DATASETS.md).
 
-use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use sim::dataset::{DatasetSpec, ManifestRecord, PlannedSequence, stats};
-use sim::recording::Recording;
+use sim::dataset::{
+    DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence, finished_record, load, stats,
+};
 use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
 use crate::cli::DatasetCommand;
-use crate::dataset_dir::{DatasetDir, finished_record};
 use crate::output::write_json;
 
 pub fn run(command: DatasetCommand) -> Result<()> {
@@ -107,177 +106,16 @@ fn tensors(
     Ok(())
 }
 
-fn load(dir: &DatasetDir) -> Result<(DatasetSpec, Vec<PlannedSequence>, Vec<ManifestRecord>)> {
-    let spec = DatasetSpec::load(&dir.spec())?;
-    let planned: Vec<PlannedSequence> = files::read_json_lines(&dir.plan(), "dataset plan")?;
-    if !dir.manifest().exists() {
-        bail!(
-            "{} has no manifest.jsonl: the run is unfinished, or its shards are not merged (`dataset merge`)",
-            dir.root.display()
-        );
-    }
-    let records: Vec<ManifestRecord> = files::read_json_lines(&dir.manifest(), "dataset manifest")?;
-    Ok((spec, planned, records))
-}
-
-/// Largest per-frame values in a recording's statistics: penetration, vertices inside,
-/// stretch, self-intersections.
-fn recorded_extremes(recording: &Recording) -> (f64, usize, f64, usize) {
-    recording
-        .stats
-        .iter()
-        .fold((0.0, 0, 0.0, 0), |(p, v, s, x), f| {
-            (
-                f64::max(p, f.max_penetration_m),
-                v.max(f.vertices_inside),
-                f64::max(s, f.max_edge_stretch),
-                x.max(f.self_intersections),
-            )
-        })
-}
-
-/// Checks one record against its plan entry, its recording and the gates; returns problems.
-fn check_record(
-    dir: &DatasetDir,
-    spec: &DatasetSpec,
-    plan: Option<&&PlannedSequence>,
-    r: &ManifestRecord,
-) -> Vec<String> {
-    let mut problems = Vec::new();
-    let mut problem = |m: String| problems.push(format!("{}: {m}", r.id));
-    let Some(p) = plan else {
-        problem("not in the plan".into());
-        return problems;
-    };
-    if (
-        &p.split, &p.garment, &p.motion, p.seed, &p.betas, p.material,
-    ) != (
-        &r.split, &r.garment, &r.motion, r.seed, &r.betas, r.material,
-    ) {
-        problem("split, garment, motion, seed, shape or material differ from the plan".into());
-    }
-    let Some(last) = r.attempts.last() else {
-        problem("no attempts recorded".into());
-        return problems;
-    };
-    if r.ok() != last.gates.passed || (r.status != "ok" && r.status != "failed") {
-        problem(format!(
-            "status '{}' disagrees with the last attempt's gates",
-            r.status
-        ));
-    }
-    if r.ok() && r.file.is_none() {
-        problem("passed but has no recording".into());
-    }
-    if let Err(e) = r.check_paths() {
-        problem(e);
-        return problems;
-    }
-    let Some(file) = &r.file else {
-        return problems;
-    };
-    let path = dir.root.join(file);
-    match files::sha256_file(&path) {
-        Err(e) => {
-            problem(format!("recording {file} is unreadable: {e:#}"));
-            return problems;
-        }
-        Ok((sha, bytes)) => {
-            if Some(&sha) != r.sha256.as_ref() || bytes != r.bytes {
-                problem(format!(
-                    "recording {file} does not match its checksum or size"
-                ));
-            }
-        }
-    }
-    let recording = match Recording::read(&path) {
-        Ok(rec) => rec,
-        Err(e) => {
-            problem(format!("{e}"));
-            return problems;
-        }
-    };
-    let meta = recording.meta.as_ref().expect("checked by the reader");
-    if recording.garment.len() != r.frames || meta.frames != r.frames {
-        problem(format!(
-            "recording has {} frames, the record {}",
-            recording.garment.len(),
-            r.frames
-        ));
-    }
-    if recording.template.positions.len() != r.vertices {
-        problem("vertex count differs from the record".into());
-    }
-    if meta.seed != Some(r.seed) || meta.betas != r.betas {
-        problem("recording's seed or shape differs from the record".into());
-    }
-    let (pen, inside, stretch, crossings) = recorded_extremes(&recording);
-    let g = &last.gates;
-    if !last.gates.timed_out
-        && ((pen - g.max_penetration_m).abs() > 1e-9
-            || inside != g.max_verts_inside
-            || (stretch - g.max_edge_stretch).abs() > 1e-9
-            || crossings != g.max_self_intersections)
-    {
-        problem("gate values differ from the recording's statistics".into());
-    }
-    if r.ok() {
-        let gates = &spec.gates;
-        let allowed = (gates.max_inside_fraction * r.vertices as f64).floor() as usize;
-        if pen > gates.max_penetration_m
-            || inside > allowed
-            || stretch > gates.max_edge_stretch
-            || crossings > gates.max_self_intersections
-        {
-            problem("marked ok but its statistics break the spec's gates".into());
-        }
-    }
-    problems
-}
-
 fn verify(root: &Path, json: Option<&Path>) -> Result<()> {
-    let dir = DatasetDir::new(root);
-    let (spec, planned, records) = load(&dir)?;
-    let by_id: HashMap<&str, &PlannedSequence> =
-        planned.iter().map(|p| (p.id.as_str(), p)).collect();
-    let mut problems = Vec::new();
-    let mut seen = HashSet::new();
-    for r in &records {
-        if !seen.insert(r.id.as_str()) {
-            problems.push(format!("{}: listed twice in the manifest", r.id));
-        }
-    }
-    let missing: Vec<&str> = planned
-        .iter()
-        .map(|p| p.id.as_str())
-        .filter(|id| !seen.contains(id))
-        .collect();
-    if !missing.is_empty() {
-        problems.push(format!(
-            "{} planned sequences are not in the manifest (first: {})",
-            missing.len(),
-            missing[0]
-        ));
-    }
-    for r in &records {
-        problems.extend(check_record(&dir, &spec, by_id.get(r.id.as_str()), r));
-    }
-    let listed: HashSet<String> = records.iter().filter_map(|r| r.file.clone()).collect();
-    if let Ok(entries) = std::fs::read_dir(dir.root.join("sequences")) {
-        for e in entries.flatten() {
-            let name = format!("sequences/{}", e.file_name().to_string_lossy());
-            if !listed.contains(&name) {
-                problems.push(format!("{name}: a file the manifest does not list"));
-            }
-        }
-    }
-    let ok = records.iter().filter(|r| r.ok()).count();
+    let found = sim::dataset::verify(root)?;
+    let problems = &found.problems;
     println!(
-        "verify {}: {} sequences in the manifest ({} planned), {ok} passed their gates, {} failed (recorded with reasons)",
+        "verify {}: {} sequences in the manifest ({} planned), {} passed their gates, {} failed (recorded with reasons)",
         root.display(),
-        records.len(),
-        planned.len(),
-        records.len() - ok
+        found.sequences,
+        found.planned,
+        found.passed,
+        found.sequences - found.passed
     );
     for p in problems.iter().take(50) {
         println!("  problem: {p}");
@@ -285,7 +123,7 @@ fn verify(root: &Path, json: Option<&Path>) -> Result<()> {
     if let Some(path) = json {
         write_json(
             path,
-            &serde_json::json!({"sequences": records.len(), "planned": planned.len(), "passed": ok,
+            &serde_json::json!({"sequences": found.sequences, "planned": found.planned, "passed": found.passed,
                 "problems": problems, "ok": problems.is_empty()}),
         )?;
     }

@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motions::BodyModel;
 use rayon::prelude::*;
 use serde_json::{Value, json};
-use sim::dataset::ManifestRecord;
+use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::data::Sequence;
 use surrogate::evaluate::baselines::{self, Baseline, FloorMaps};
@@ -22,7 +22,6 @@ use surrogate::predict::{BodySequence, Guidance, Predictor, Settings};
 use surrogate::train::TrainedModel;
 
 use crate::cli::EvaluateArgs;
-use crate::dataset_dir::DatasetDir;
 use crate::inputs;
 use crate::output::write_json;
 use crate::prediction::model_dir;

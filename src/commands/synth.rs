@@ -19,13 +19,13 @@ use motions::BodyModel;
 use rayon::prelude::*;
 use serde_json::json;
 use sim::dataset::{
-    Attempt, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, expand_motions, plan,
+    Attempt, DatasetDir, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, expand_motions,
+    finished_record, plan,
 };
 use sim::scene::BodyAttachment;
 use sim::{SceneConfig, SolverParams};
 
 use crate::cli::SynthArgs;
-use crate::dataset_dir::{DatasetDir, finished_record};
 use crate::inputs;
 use crate::output::{write_atomic, write_json};
 use crate::run::{RecordOptions, is_deadline, prepare_with, record};

@@ -2,16 +2,22 @@
 //! materials becomes a reproducible list of sequences (stable ids and seeds, training and test
 //! splits), each judged by quality gates and recorded in a JSON Lines manifest.
 //!
-//! Running the sequences (files, parallelism, shards, resume) is the command line's part; this
-//! module is the plain data: [`DatasetSpec`], [`plan`], [`ManifestRecord`], [`GateResult`].
+//! This module is the plain data ([`DatasetSpec`], [`plan`], [`ManifestRecord`],
+//! [`GateResult`]), the folder's layout ([`DatasetDir`], [`finished_record`]) and its
+//! verification ([`verify`]). Running the sequences (parallelism, shards, resume) is still the
+//! command line's part.
 
+mod dir;
 mod manifest;
 mod plan;
 mod spec;
+mod verify;
 
+pub use dir::{DatasetDir, finished_record};
 pub use manifest::{Attempt, GateResult, ManifestRecord, stats};
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};
 pub use spec::{
     DatasetSpec, GarmentEntry, GateSpec, MaterialRanges, MotionEntry, SequenceSpec, SolverSpec,
     SplitSpec, Tag,
 };
+pub use verify::{Verification, load, verify};

@@ -1,5 +1,5 @@
-//! A dataset folder as `synth` and `dataset` share it: its paths and the finished-sequence
-//! check that makes a re-run resume.
+//! A dataset folder: where its files lie, and the finished-sequence check that makes a
+//! re-run resume.
 //!
 //! Layout: `spec.toml` (the spec), `plan.jsonl` (every planned sequence),
 //! `templates/<garment>.obj`, `sequences/<id>.mcap`, `records/<id>.json` (one manifest line
@@ -8,34 +8,42 @@
 
 use std::path::{Path, PathBuf};
 
-use sim::dataset::ManifestRecord;
+use super::ManifestRecord;
 
 /// Paths inside a dataset folder.
 pub struct DatasetDir {
+    /// The folder.
     pub root: PathBuf,
 }
 
 impl DatasetDir {
+    /// The dataset folder at `root`.
     pub fn new(root: &Path) -> Self {
         Self {
             root: root.to_path_buf(),
         }
     }
+    /// `spec.toml`: the spec the dataset was made from.
     pub fn spec(&self) -> PathBuf {
         self.root.join("spec.toml")
     }
+    /// `plan.jsonl`: every planned sequence.
     pub fn plan(&self) -> PathBuf {
         self.root.join("plan.jsonl")
     }
+    /// `manifest.jsonl`: the records in plan order, once every sequence has one.
     pub fn manifest(&self) -> PathBuf {
         self.root.join("manifest.jsonl")
     }
+    /// A sequence's recording, relative to the folder (as records name it).
     pub fn sequence_file(id: &str) -> String {
         format!("sequences/{id}.mcap")
     }
+    /// A finished sequence's record.
     pub fn record(&self, id: &str) -> PathBuf {
         self.root.join("records").join(format!("{id}.json"))
     }
+    /// The template OBJ a garment (library name or OBJ path) is simulated from.
     pub fn template(&self, garment: &str) -> PathBuf {
         let name: String = Path::new(garment)
             .file_stem()
