@@ -16,7 +16,9 @@ use surrogate::predict::{BodySequence, Predictor, PreparedGarment, Settings, Tim
 use surrogate::train::TrainedModel;
 
 use crate::output::write_atomic;
-use crate::run::{Prepared, write_objs};
+use sim::run::Prepared;
+
+use crate::run::write_objs;
 
 /// Where `--model builtin` looks: the weights shipped in the repository.
 pub fn builtin_dir() -> PathBuf {

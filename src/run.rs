@@ -13,8 +13,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use motions::BodyModel;
 use serde_json::json;
 use sim::SceneConfig;
-use sim::recording::{Channels, Recording, SequenceWriter, TemplateArrays};
-use sim::scene::{BodyAttachment, FPS, FrameOutput, RunSummary, Scene};
+use sim::recording::Recording;
+use sim::run::Prepared;
+use sim::scene::{BodyAttachment, FrameOutput, RunSummary};
 
 use crate::cli::SceneArgs;
 use crate::inputs;
@@ -126,13 +127,6 @@ pub fn print_config(args: &SceneArgs, config: &SceneConfig) -> Result<bool> {
     Ok(true)
 }
 
-/// A scene with its model and template (shared between the sequences of a dataset run).
-pub struct Prepared {
-    pub model: Arc<BodyModel>,
-    pub garment: Arc<garments::Garment>,
-    pub scene: Scene,
-}
-
 /// Loads what the configuration names (body model, garment, motion) and builds its scene.
 pub fn prepare(config: SceneConfig) -> Result<Prepared> {
     let model = Arc::new(inputs::body_model(config.model.as_deref().map(Path::new))?);
@@ -150,13 +144,7 @@ pub fn prepare_with(
 ) -> Result<Prepared> {
     let shaped = model.shape(&config.betas)?;
     let motion = inputs::motion(&config.motion, &model, &shaped)?;
-    let template = (garment.positions.clone(), garment.triangles.clone());
-    let scene = Scene::new(config, template, attachments, motion, &model)?;
-    Ok(Prepared {
-        model,
-        garment,
-        scene,
-    })
+    Ok(Prepared::new(model, garment, attachments, motion, config)?)
 }
 
 /// How a run shows itself and what it writes besides the recording.
@@ -180,21 +168,11 @@ pub fn is_deadline(error: &anyhow::Error) -> bool {
     })
 }
 
-/// Runs a prepared scene into `out` (atomically).
+/// Runs a prepared scene into `out` (atomically), with a progress bar and OBJ frames as
+/// `options` ask.
 pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSummary> {
-    let frames = p.scene.num_frames();
     let software = format!("dit-garment {}", env!("CARGO_PKG_VERSION"));
-    let meta = p
-        .scene
-        .sequence_meta(&p.garment.name, p.model.name(), &software);
-    let template = TemplateArrays {
-        positions: p.garment.positions.clone(),
-        triangles: p.garment.triangles.clone(),
-        uvs: p.garment.uvs.clone(),
-        uv_triangles: p.garment.uv_triangles.clone(),
-    };
-    let recorded = p.scene.config.record;
-    let bar = ProgressBar::new(frames as u64).with_style(
+    let bar = ProgressBar::new(p.scene.num_frames() as u64).with_style(
         ProgressStyle::with_template(
             "simulating [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
         )?
@@ -205,21 +183,7 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
     }
     let mut summary = None;
     write_atomic(out, |w| {
-        let channels = Channels {
-            template: Some(&template),
-            body_faces: recorded.body_vertices.then(|| p.model.faces()),
-            joints: false,
-            stats: true,
-        };
-        let mut rec = SequenceWriter::new(w, &meta, channels, FPS)?;
-        if recorded.foxglove {
-            rec = rec.with_foxglove_scene(&template.triangles, Some(p.model.faces()))?;
-        }
-        let s = p.scene.run(&p.model, |frame| {
-            if options.deadline.is_some_and(|d| Instant::now() > d) {
-                return Err(sim::Error::Deadline { frame: frame.index });
-            }
-            rec.write_frame(&frame.record())?;
+        let s = p.record(w, &software, options.deadline, |frame| {
             if let Some((dir, every)) = options.obj
                 && frame.index % every.max(1) == 0
             {
@@ -231,7 +195,6 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
             bar.inc(1);
             Ok(())
         })?;
-        rec.finish()?;
         summary = Some(s);
         Ok(())
     })?;

@@ -23,6 +23,7 @@ pub mod obstacles;
 mod params;
 pub mod recording;
 pub mod regress;
+pub mod run;
 pub mod scene;
 mod self_contact;
 mod self_intersection;

@@ -9,6 +9,7 @@
 use anyhow::{Context, Result};
 use render::View;
 use serde_json::{Value, json};
+use sim::run::Prepared;
 use surrogate::burn::prelude::Device;
 use surrogate::predict::Settings;
 use surrogate::train::TrainedModel;
@@ -17,9 +18,7 @@ use crate::cli::DemoArgs;
 use crate::output::write_json;
 use crate::pictures::{RenderJob, comparison_gif, comparison_sheet, render_recording, write_view};
 use crate::prediction::{SceneRequest, model_dir, predict_scene};
-use crate::run::{
-    Prepared, RecordOptions, prepare, print_config, record, resolve_config, summary_json,
-};
+use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
 
 /// The demo's garment: a library design the shipped model was not trained on (held out in
 /// specs/shipped.toml), of a family it was trained on (t-shirts), so the demo shows the

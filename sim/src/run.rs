@@ -1,0 +1,151 @@
+//! A garment run as every command shares it: a scene with the body model and garment it was
+//! built from ([`Prepared`]), run frame by frame into an MCAP recording, with a hook for what
+//! a caller does beside it per frame (OBJ export, progress) and an optional deadline. Where
+//! the recording goes (a temporary file renamed into place) is the caller's.
+
+use std::io::{Seek, Write};
+use std::sync::Arc;
+use std::time::Instant;
+
+use motions::{BodyModel, Motion};
+
+use crate::SceneConfig;
+use crate::error::{Error, Result};
+use crate::recording::{Channels, SequenceWriter, TemplateArrays};
+use crate::scene::{BodyAttachment, FPS, FrameOutput, RunSummary, Scene};
+
+/// A scene with its body model and garment template (shared between a dataset's sequences).
+pub struct Prepared {
+    /// The body model the scene poses.
+    pub model: Arc<BodyModel>,
+    /// The garment template.
+    pub garment: Arc<garments::Garment>,
+    /// The scene.
+    pub scene: Scene,
+}
+
+impl Prepared {
+    /// The scene of `config` on a loaded model, template and motion (the configuration's
+    /// garment, model and motion keys name what was loaded; its shape and settings apply).
+    pub fn new(
+        model: Arc<BodyModel>,
+        garment: Arc<garments::Garment>,
+        attachments: Vec<BodyAttachment>,
+        motion: Motion,
+        config: SceneConfig,
+    ) -> Result<Self> {
+        let template = (garment.positions.clone(), garment.triangles.clone());
+        let scene = Scene::new(config, template, attachments, motion, &model)?;
+        Ok(Self {
+            model,
+            garment,
+            scene,
+        })
+    }
+
+    /// Runs the scene and writes its recording to `out` (template, frames, statistics, and
+    /// the body or Foxglove channels the configuration's `record` asks for), calling
+    /// `each_frame` after each frame is written. `software` is recorded as the writer's name.
+    /// Stops with [`Error::Deadline`] when the run is still going at `deadline`.
+    pub fn record<W: Write + Seek>(
+        &self,
+        out: W,
+        software: &str,
+        deadline: Option<Instant>,
+        mut each_frame: impl FnMut(&FrameOutput) -> Result<()>,
+    ) -> Result<RunSummary> {
+        let meta = self
+            .scene
+            .sequence_meta(&self.garment.name, self.model.name(), software);
+        let template = TemplateArrays {
+            positions: self.garment.positions.clone(),
+            triangles: self.garment.triangles.clone(),
+            uvs: self.garment.uvs.clone(),
+            uv_triangles: self.garment.uv_triangles.clone(),
+        };
+        let recorded = self.scene.config.record;
+        let channels = Channels {
+            template: Some(&template),
+            body_faces: recorded.body_vertices.then(|| self.model.faces()),
+            joints: false,
+            stats: true,
+        };
+        let mut rec = SequenceWriter::new(out, &meta, channels, FPS)?;
+        if recorded.foxglove {
+            rec = rec.with_foxglove_scene(&template.triangles, Some(self.model.faces()))?;
+        }
+        let summary = self.scene.run(&self.model, |frame| {
+            if deadline.is_some_and(|d| Instant::now() > d) {
+                return Err(Error::Deadline { frame: frame.index });
+            }
+            rec.write_frame(&frame.record())?;
+            each_frame(frame)
+        })?;
+        rec.finish()?;
+        Ok(summary)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A coarse built-in skirt (24 x 8) on the default body walking, `frames` frames.
+    fn skirt(frames: usize) -> Prepared {
+        let model = BodyModel::default_body();
+        let params = garments::SkirtParams {
+            columns: 24,
+            rings: 8,
+            ..garments::SkirtParams::default()
+        };
+        let (garment, attachments) =
+            crate::scene::builtin_template(&model, "skirt", &params).unwrap();
+        let config = SceneConfig {
+            frames: Some(frames),
+            blend_frames: 2,
+            settle_frames: 1,
+            ..SceneConfig::default()
+        };
+        let shaped = model.shape(&config.betas).unwrap();
+        let motion = motions::library::MotionSpec::parse("walk")
+            .unwrap()
+            .generate(&model, &shaped)
+            .unwrap();
+        let (model, garment) = (Arc::new(model), Arc::new(garment));
+        Prepared::new(model, garment, attachments, motion, config).unwrap()
+    }
+
+    #[test]
+    fn a_run_records_the_same_bytes_twice_and_calls_the_hook_per_frame() {
+        let p = skirt(4);
+        let mut frames = Vec::new();
+        let mut first = std::io::Cursor::new(Vec::new());
+        let summary = p
+            .record(&mut first, "test", None, |f| {
+                frames.push(f.index);
+                Ok(())
+            })
+            .unwrap();
+        assert_eq!(frames, [0, 1, 2, 3]);
+        assert_eq!(summary.frames, 4);
+        let mut second = std::io::Cursor::new(Vec::new());
+        p.record(&mut second, "test", None, |_| Ok(())).unwrap();
+        let (first, second) = (first.into_inner(), second.into_inner());
+        assert!(first == second, "same scene, same bytes");
+        let back =
+            crate::recording::Recording::from_bytes(&first, std::path::Path::new("t")).unwrap();
+        assert_eq!(back.garment.len(), 4);
+    }
+
+    #[test]
+    fn a_run_past_its_deadline_stops_with_the_frame_it_reached() {
+        let p = skirt(3);
+        let past = Instant::now();
+        let out = std::io::Cursor::new(Vec::new());
+        let stopped = p.record(out, "test", Some(past), |_| Ok(()));
+        assert!(
+            matches!(stopped, Err(Error::Deadline { frame: 0 })),
+            "{stopped:?}"
+        );
+    }
+}
