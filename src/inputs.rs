@@ -109,76 +109,25 @@ pub fn garment(
         .with_context(|| format!("preparing built-in garment '{source}'"))
 }
 
-/// Where made templates are cached: `$DIT_GARMENT_CACHE`, else `$XDG_CACHE_HOME/dit-garment`,
-/// else `~/.cache/dit-garment`.
-pub fn cache_dir() -> std::path::PathBuf {
-    if let Some(dir) = std::env::var_os("DIT_GARMENT_CACHE") {
-        return dir.into();
-    }
-    let base = std::env::var_os("XDG_CACHE_HOME")
-        .map(std::path::PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))
-        .unwrap_or_else(|| ".cache".into());
-    base.join("dit-garment")
-}
-
-/// A library design's (or a variant's) template on `model`, made (sewn and draped, about
-/// 5-20 s) on first use and cached under [`cache_dir`], keyed by the pattern, the body, the
-/// sewing options, the software version and the engine revision.
-/// Refused when the design fails a quality gate. The cached OBJ is always what is returned (read
-/// back after making), so results do not depend on whether the cache was warm.
+/// A library design's (or a variant's) template on `model`, made on first use and cached in
+/// the cache folder ([`sim::templates::library_template`]).
 pub fn library_template(
     design: &garments::library::NamedDesign,
     model: &BodyModel,
 ) -> Result<garments::Garment> {
-    use std::hash::{Hash, Hasher};
-    let pattern = design.pattern()?;
-    let options = sim::sewing::SewingOptions::default();
-    let mut hasher = std::collections::hash_map::DefaultHasher::new();
-    pattern.to_json().hash(&mut hasher);
-    env!("CARGO_PKG_VERSION").hash(&mut hasher);
-    sim::ENGINE_REVISION.hash(&mut hasher);
-    model.name().hash(&mut hasher);
-    format!("{options:?}").hash(&mut hasher);
-    for v in model.template() {
-        v.map(f64::to_bits).hash(&mut hasher);
-    }
-    let path = cache_dir().join(format!("{}-{:016x}.obj", design.name, hasher.finish()));
-    if !path.exists() {
-        eprintln!(
-            "making the template of '{}' (first use; cached in {})",
-            design.name,
-            path.display()
-        );
-        let mesh = pattern.mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
-        let (template, report) = sim::sewing::sew(model, &mesh, &options)?;
-        if !report.gates_passed {
-            bail!(
-                "the template of '{}' failed its quality gates: {}",
+    let cache = sim::templates::cache_dir();
+    Ok(sim::templates::library_template(
+        design,
+        model,
+        &cache,
+        |path| {
+            eprintln!(
+                "making the template of '{}' (first use; cached in {})",
                 design.name,
-                report.failed.join("; ")
-            );
-        }
-        write_template(&path, &template)?;
-    }
-    // Always the cached file, so the first use and every later one simulate the same numbers.
-    let mut cached = garments::read_obj(&path)?;
-    cached.name = design.name.to_string();
-    cached.validate()?;
-    Ok(cached)
-}
-
-/// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically.
-pub fn write_template(path: &Path, template: &garments::Garment) -> Result<()> {
-    let ply = path.extension().is_some_and(|e| e == "ply");
-    crate::output::write_atomic(path, |w| {
-        if ply {
-            garments::write_ply(w, template)?;
-        } else {
-            garments::write_obj(w, template, None)?;
-        }
-        Ok(())
-    })
+                path.display()
+            )
+        },
+    )?)
 }
 
 /// A body of one recorded frame.

@@ -107,8 +107,8 @@ pub enum Error {
         /// The motion.
         motion: String,
     },
-    /// A built-in garment could not be made.
-    #[error("built-in garment '{garment}': {problem}")]
+    /// A built-in garment or a library design's template could not be made.
+    #[error("garment '{garment}': {problem}")]
     Garment {
         /// The garment name.
         garment: String,

@@ -31,6 +31,7 @@ pub mod sewing;
 mod solver;
 mod spin_join;
 mod system;
+pub mod templates;
 mod untangle;
 
 pub use cloth::{ClothMesh, ClothState, Vec3};

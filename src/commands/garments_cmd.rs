@@ -18,7 +18,6 @@ macro_rules! say {
         writeln!(std::io::stdout().lock(), $($arg)*)?;
     }};
 }
-use crate::inputs;
 use crate::output::{write_atomic, write_json};
 
 /// One row of `garments list --json`.
@@ -179,7 +178,7 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
     let (template, sewing) =
         sim::sewing::sew(&model, &mesh, &sim::sewing::SewingOptions::default())
             .with_context(|| format!("sewing '{}'", pattern.name))?;
-    inputs::write_template(out, &template)?;
+    sim::templates::write_template(out, &template)?;
     let made = MakeReport {
         name: pattern.name.clone(),
         sewing,

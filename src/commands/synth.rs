@@ -353,7 +353,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     for (name, (garment, _)) in &made {
         let template_path = dir.template(name);
         if !template_path.exists() {
-            inputs::write_template(&template_path, garment)?;
+            sim::templates::write_template(&template_path, garment)?;
         }
     }
     let templates: HashMap<_, _> = made.into_iter().collect();

@@ -1,0 +1,151 @@
+//! Library templates made once and cached: a design's pattern sewn and draped on a body
+//! (about 5-20 s), stored as OBJ under a key of everything the result depends on, and always
+//! read back from that file, so a warm and a cold cache simulate the same numbers.
+
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+
+use garments::Garment;
+use garments::library::NamedDesign;
+use motions::BodyModel;
+
+use crate::error::{Error, Result};
+use crate::sewing::{SewingOptions, sew};
+
+/// Where made templates are cached: `$DIT_GARMENT_CACHE`, else `$XDG_CACHE_HOME/dit-garment`,
+/// else `~/.cache/dit-garment`.
+pub fn cache_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os("DIT_GARMENT_CACHE") {
+        return dir.into();
+    }
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cache")))
+        .unwrap_or_else(|| ".cache".into());
+    base.join("dit-garment")
+}
+
+/// The cached template's path in `cache`: the design's name and a hash of its pattern, the
+/// body, the sewing options, the software version and the engine revision.
+pub fn template_path(design: &NamedDesign, model: &BodyModel, cache: &Path) -> Result<PathBuf> {
+    let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    pattern.to_json().hash(&mut hasher);
+    env!("CARGO_PKG_VERSION").hash(&mut hasher);
+    crate::ENGINE_REVISION.hash(&mut hasher);
+    model.name().hash(&mut hasher);
+    format!("{:?}", SewingOptions::default()).hash(&mut hasher);
+    for v in model.template() {
+        v.map(f64::to_bits).hash(&mut hasher);
+    }
+    Ok(cache.join(format!("{}-{:016x}.obj", design.name, hasher.finish())))
+}
+
+/// A library design's (or a variant's) template on `model`, made on first use (`making` hears
+/// the path it is being made for) and cached in `cache` (see [`template_path`]). Refused when
+/// the design fails a quality gate. The cached OBJ is always what is returned.
+pub fn library_template(
+    design: &NamedDesign,
+    model: &BodyModel,
+    cache: &Path,
+    making: impl FnOnce(&Path),
+) -> Result<Garment> {
+    let path = template_path(design, model, cache)?;
+    if !path.exists() {
+        making(&path);
+        let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
+        let mesh = pattern
+            .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)
+            .map_err(|e| garment_error(design, e))?;
+        let (template, report) = sew(model, &mesh, &SewingOptions::default())?;
+        if !report.gates_passed {
+            return Err(garment_error(
+                design,
+                format!(
+                    "the template failed its quality gates: {}",
+                    report.failed.join("; ")
+                ),
+            ));
+        }
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|source| files::Error::Io {
+                path: dir.to_path_buf(),
+                source,
+            })?;
+        }
+        write_template(&path, &template)?;
+    }
+    // Always the cached file, so the first use and every later one simulate the same numbers.
+    let mut cached = garments::read_obj(&path).map_err(|e| garment_error(design, e))?;
+    cached.name = design.name.to_string();
+    cached.validate().map_err(|e| garment_error(design, e))?;
+    Ok(cached)
+}
+
+/// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically.
+pub fn write_template(path: &Path, template: &Garment) -> Result<()> {
+    let ply = path.extension().is_some_and(|e| e == "ply");
+    Ok(files::write_with(path, |w| {
+        if ply {
+            garments::write_ply(w, template)
+        } else {
+            garments::write_obj(w, template, None)
+        }
+    })?)
+}
+
+fn garment_error(design: &NamedDesign, problem: impl std::fmt::Display) -> Error {
+    Error::Garment {
+        garment: design.name.clone(),
+        problem: problem.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_template_is_keyed_by_design_and_body_and_written_as_obj_or_ply() {
+        let model = BodyModel::default_body();
+        let cache = Path::new("/cache");
+        let design = |name| garments::library::resolve(name).unwrap();
+        let path = |name| template_path(&design(name), &model, cache).unwrap();
+        assert_eq!(path("tshirt_fitted"), path("tshirt_fitted"), "stable");
+        assert_ne!(
+            path("tshirt_fitted"),
+            path("tshirt_fitted~1"),
+            "a variant is another"
+        );
+        let name = path("tshirt_fitted")
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        assert!(
+            name.starts_with("tshirt_fitted-") && name.ends_with(".obj"),
+            "{name}"
+        );
+
+        let dir = tempfile::tempdir().unwrap();
+        let (garment, _) = crate::scene::builtin_template(
+            &model,
+            "skirt",
+            &garments::SkirtParams {
+                columns: 12,
+                rings: 4,
+                ..garments::SkirtParams::default()
+            },
+        )
+        .unwrap();
+        let obj = dir.path().join("t.obj");
+        write_template(&obj, &garment).unwrap();
+        let back = garments::read_obj(&obj).unwrap();
+        // The OBJ may number the vertices its own way; the mesh is the same size.
+        assert_eq!(back.triangles.len(), garment.triangles.len());
+        assert_eq!(back.positions.len(), garment.positions.len());
+        let ply = dir.path().join("t.ply");
+        write_template(&ply, &garment).unwrap();
+        assert!(std::fs::read(&ply).unwrap().starts_with(b"ply\n"));
+    }
+}
