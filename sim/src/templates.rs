@@ -67,12 +67,6 @@ pub fn library_template(
                 ),
             ));
         }
-        if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).map_err(|source| files::Error::Io {
-                path: dir.to_path_buf(),
-                source,
-            })?;
-        }
         write_template(&path, &template)?;
     }
     // Always the cached file, so the first use and every later one simulate the same numbers.
@@ -82,8 +76,15 @@ pub fn library_template(
     Ok(cached)
 }
 
-/// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically.
+/// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically (its folder
+/// created if need be).
 pub fn write_template(path: &Path, template: &Garment) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| files::Error::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+    }
     let ply = path.extension().is_some_and(|e| e == "ply");
     Ok(files::write_with(path, |w| {
         if ply {
@@ -138,7 +139,7 @@ mod tests {
             },
         )
         .unwrap();
-        let obj = dir.path().join("t.obj");
+        let obj = dir.path().join("new folder/t.obj");
         write_template(&obj, &garment).unwrap();
         let back = garments::read_obj(&obj).unwrap();
         // The OBJ may number the vertices its own way; the mesh is the same size.
