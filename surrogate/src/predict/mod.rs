@@ -516,7 +516,7 @@ impl<'a> Predictor<'a> {
         // The guidance term of normalized maps `values` at `scale`: the penalty's gradient of
         // each frame, spread to its texels and divided by the targets' std.
         let correction_of =
-            |values: &[f32], scale: f64, known: &mut [ClearanceCache]| -> Option<Vec<f32>> {
+            |values: &[f32], scale: f64, known: &mut [ClearanceCache]| -> Result<Vec<f32>> {
                 let mut correction = vec![0.0f32; values.len()];
                 for ((z, out), ((base, surface), cache)) in values
                     .chunks(3 * plane)
@@ -524,13 +524,13 @@ impl<'a> Predictor<'a> {
                     .zip(bases.iter().zip(surfaces).zip(known.iter_mut()))
                 {
                     let map = targets_stats.denormalize::<3>(z);
-                    let world = base.decode(&image.read(&map).ok()?);
+                    let world = base.decode(&image.read(&map)?);
                     let gradient: Vec<[f64; 3]> =
                         penalty_gradient(cache.clearances(surface, &world, band), band)
                             .into_iter()
                             .map(|g| base.gradient_to_target(g))
                             .collect();
-                    let spread_image = image.read_transpose(&gradient).ok()?;
+                    let spread_image = image.read_transpose(&gradient)?;
                     for (c, out) in out.chunks_mut(plane).enumerate() {
                         let factor = scale / targets_stats.std[c];
                         for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
@@ -538,23 +538,38 @@ impl<'a> Predictor<'a> {
                         }
                     }
                 }
-                Some(correction)
+                Ok(correction)
             };
+        // The sampler's callback answers "no guidance" on an error; the first one is kept
+        // here and ends the prediction after the draw.
+        let mut failure = None;
         let mut values = vec![0.0f32; b * 3 * plane];
         for d in 0..settings.draws {
             let noise = tensor(&noise_of(d)).reshape([b, 3, r, r]);
             let x = euler(&field, noise, &grid, &mut |k, s, x0_hat| {
-                if !settings.guidance.guides(k, settings.steps) {
+                if failure.is_some() || !settings.guidance.guides(k, settings.steps) {
                     return None;
                 }
                 let t = Instant::now();
                 let ds = s - grid[k + 1];
                 let scale = settings.guidance.weight.min(1.0 / ds);
-                let values: Vec<f32> = x0_hat.clone().try_into_vec_as().ok()?;
-                let correction = correction_of(&values, scale, &mut known)?;
+                let correction = x0_hat
+                    .clone()
+                    .try_into_vec_as::<f32>()
+                    .map_err(|e| Error::Invalid(format!("the sampler's estimate: {e:?}")))
+                    .and_then(|values| correction_of(&values, scale, &mut known));
                 timing.guidance_s += t.elapsed().as_secs_f64();
-                Some(tensor(&correction).reshape([b, 3, r, r]))
+                match correction {
+                    Ok(c) => Some(tensor(&c).reshape([b, 3, r, r])),
+                    Err(e) => {
+                        failure = Some(e);
+                        None
+                    }
+                }
             });
+            if let Some(e) = failure.take() {
+                return Err(e);
+            }
             let draw: Vec<f32> = x
                 .try_into_vec_as()
                 .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))?;
@@ -567,9 +582,8 @@ impl<'a> Predictor<'a> {
         if settings.guidance.weight > 0.0 {
             for _ in 0..settings.guidance.refine {
                 let t = Instant::now();
-                if let Some(correction) = correction_of(&values, 1.0, &mut known) {
-                    values.iter_mut().zip(correction).for_each(|(v, c)| *v -= c);
-                }
+                let correction = correction_of(&values, 1.0, &mut known)?;
+                values.iter_mut().zip(correction).for_each(|(v, c)| *v -= c);
                 timing.guidance_s += t.elapsed().as_secs_f64();
             }
         }
