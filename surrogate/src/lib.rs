@@ -13,6 +13,7 @@ mod error;
 pub mod evaluate;
 pub mod geometry;
 pub mod model;
+pub mod noise;
 pub mod predict;
 pub mod sample;
 pub mod train;

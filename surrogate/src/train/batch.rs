@@ -2,36 +2,21 @@
 //! seeded by (run seed, step), so any step's batch is the same whether the run was resumed or
 //! not; and the weighted velocity loss.
 //!
-//! Noise is Box-Muller over the seeded ChaCha stream (a few lines; the model's own RNG is one
-//! global state in burn and would tie the batches to program order).
+//! Noise is drawn by [`crate::noise`], shared with sampling.
 
 use burn::prelude::*;
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use super::config::{Objective, TimeSampling, TrainConfig};
 use crate::data::{Frames, TrainingTensors};
 use crate::model::{BODY_CHANNELS, DitConfig, Prediction};
-
-/// A generator for `purpose` at `step` of the run seeded by `seed`.
-pub fn generator(seed: u64, purpose: u64, step: u64) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(purpose);
-    rng.set_word_pos(u128::from(step) << 32);
-    rng
-}
+use crate::noise::{generator, normal};
 
 /// Stream of the training batches.
 pub const TRAIN_STREAM: u64 = 1;
 /// Stream of the validation draws.
 pub const VALIDATION_STREAM: u64 = 2;
-
-/// A standard normal draw.
-pub fn normal(rng: &mut ChaCha8Rng) -> f32 {
-    let u1: f64 = rng.random::<f64>().max(1e-300);
-    let u2: f64 = rng.random();
-    ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
-}
 
 /// A time in (0, 1], always 1 for the regression objective.
 pub fn time(rng: &mut ChaCha8Rng, training: &TrainConfig) -> f32 {

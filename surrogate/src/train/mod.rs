@@ -21,7 +21,7 @@ use burn::optim::GradientsParams;
 use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
-pub use batch::{Batch, Recipe, generator, normal, validation_batches};
+pub use batch::{Batch, Recipe, validation_batches};
 pub use checkpoint::RunState;
 pub use config::{Objective, RunConfig, TimeSampling, TrainConfig};
 pub use export::{TENSORS_MANIFEST, TrainedModel, load_run, save_reference, save_weights};
@@ -31,6 +31,7 @@ pub use optim::{clip_global_norm, ema_decay, update_ema};
 use crate::data::TrainingTensors;
 use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
+use crate::noise::generator;
 
 /// One line of `log.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
