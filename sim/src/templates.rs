@@ -29,6 +29,15 @@ pub fn cache_dir() -> PathBuf {
 /// body, the sewing options, the software version and the engine revision.
 pub fn template_path(design: &NamedDesign, model: &BodyModel, cache: &Path) -> Result<PathBuf> {
     let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
+    Ok(keyed_path(design, &pattern, model, cache))
+}
+
+fn keyed_path(
+    design: &NamedDesign,
+    pattern: &garments::Pattern,
+    model: &BodyModel,
+    cache: &Path,
+) -> PathBuf {
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     pattern.to_json().hash(&mut hasher);
     env!("CARGO_PKG_VERSION").hash(&mut hasher);
@@ -38,7 +47,7 @@ pub fn template_path(design: &NamedDesign, model: &BodyModel, cache: &Path) -> R
     for v in model.template() {
         v.map(f64::to_bits).hash(&mut hasher);
     }
-    Ok(cache.join(format!("{}-{:016x}.obj", design.name, hasher.finish())))
+    cache.join(format!("{}-{:016x}.obj", design.name, hasher.finish()))
 }
 
 /// A library design's (or a variant's) template on `model`, made on first use (`making` hears
@@ -50,10 +59,10 @@ pub fn library_template(
     cache: &Path,
     making: impl FnOnce(&Path),
 ) -> Result<Garment> {
-    let path = template_path(design, model, cache)?;
+    let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
+    let path = keyed_path(design, &pattern, model, cache);
     if !path.exists() {
         making(&path);
-        let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
         let mesh = pattern
             .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)
             .map_err(|e| garment_error(design, e))?;
