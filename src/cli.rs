@@ -419,6 +419,11 @@ pub enum DatasetCommand {
         /// before 2026-12-03).
         #[arg(long, default_value = "bounded", value_parser = ["bounded", "zscore"])]
         conditions: String,
+        /// Also store, per texel, the offset from the skinned template to the nearest point
+        /// of the posed body and that point's normal (6 more body channels, `lbs_residual`
+        /// only), for models with `body_nearest = true`.
+        #[arg(long)]
+        body_nearest: bool,
         /// Earlier frames in each pose window.
         #[arg(long, default_value_t = 2)]
         window: usize,

@@ -207,6 +207,52 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
         );
     }
 
+    // With the nearest-body inputs: 12 body channels, the first 6 the same bytes as before;
+    // the displacement target has no body inputs to extend.
+    let n = dir.path().join("tn");
+    let nearest = |target: &str| {
+        run_with(
+            &[
+                "dataset",
+                "tensors",
+                data.to_str().unwrap(),
+                "--out",
+                n.to_str().unwrap(),
+                "--target",
+                target,
+                "--body-nearest",
+                "--quiet",
+            ],
+            &[],
+        )
+    };
+    let refused = nearest("displacement");
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&refused.stderr)
+            .contains("nearest-body inputs need the lbs_residual"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
+    assert!(!n.exists(), "a refused run wrote {}", n.display());
+    assert!(nearest("lbs_residual").status.success());
+    let shard = |dir: &Path| std::fs::read(dir.join("train-0000.safetensors")).unwrap();
+    let (plain, near) = (shard(&a), shard(&n));
+    let bodies = |bytes: &[u8]| -> (Vec<usize>, Vec<u8>) {
+        let file = safetensors::SafeTensors::deserialize(bytes).unwrap();
+        let t = file.tensor("bodies").unwrap();
+        (t.shape().to_vec(), t.data().to_vec())
+    };
+    let ((shape_a, data_a), (shape_n, data_n)) = (bodies(&plain), bodies(&near));
+    assert_eq!((shape_a[1], shape_n[1]), (6, 12));
+    let per = |channels: usize| channels * 64 * 64 * 4;
+    for f in 0..shape_a[0] {
+        assert!(
+            data_a[f * per(6)..(f + 1) * per(6)] == data_n[f * per(12)..f * per(12) + per(6)],
+            "frame {f}: the first 6 body channels changed"
+        );
+    }
+
     // A damaged recording: the error names it, exit 1, nothing written.
     let record: Value = serde_json::from_str(
         std::fs::read_to_string(data.join("manifest.jsonl"))

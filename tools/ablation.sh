@@ -7,6 +7,7 @@
 #
 #   tools/ablation.sh tensors DATA OUT          # both tensor sets (zscore and bounded conditions)
 #   tools/ablation.sh tensors-designs DESIGNS OUT   # bounded tensors of specs/designs.toml's data (a5_*)
+#   tools/ablation.sh tensors-nearest DESIGNS OUT   # the same with the nearest-body inputs (a6_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -26,6 +27,7 @@ tensors_of() {
   case "$1" in
     a0_* | a1_* | a2_*) echo zscore ;;
     a5_*) echo designs ;;
+    a6_*) echo nearest ;;
     *) echo bounded ;;
   esac
 }
@@ -42,6 +44,12 @@ case "${1:-}" in
     data=$2 out=$3
     [ -f "$out/tensors-designs/manifest.json" ] ||
       "$bin" dataset tensors "$data" --out "$out/tensors-designs" --target lbs_residual --conditions bounded --quiet
+    ;;
+  tensors-nearest)
+    data=$2 out=$3
+    [ -f "$out/tensors-nearest/manifest.json" ] ||
+      "$bin" dataset tensors "$data" --out "$out/tensors-nearest" --target lbs_residual --conditions bounded \
+        --body-nearest --quiet
     ;;
   train)
     arm=$2 out=$3
@@ -71,7 +79,7 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,19p' "$0"
+    sed -n '2,20p' "$0"
     exit 2
     ;;
 esac

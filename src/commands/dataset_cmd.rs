@@ -25,6 +25,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             resolution,
             target,
             conditions,
+            body_nearest,
             window,
             every,
             shard_frames,
@@ -53,6 +54,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 every,
                 shard_frames,
                 conditions: ConditionScaling::parse(&conditions).context("unknown --conditions")?,
+                nearest: body_nearest,
                 ..TensorOptions::default()
             };
             tensors(&dir, &out, model.body_model.as_deref(), &options, quiet)

@@ -195,7 +195,7 @@ impl TrainingTensors {
                     &file,
                     "bodies",
                     Dtype::F32,
-                    &[f, crate::model::BODY_CHANNELS, r, r],
+                    &[f, m.body_channels(), r, r],
                     &path,
                 )?);
                 stats.normalize(&mut bodies, r * r);

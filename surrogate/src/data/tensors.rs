@@ -1,7 +1,8 @@
 //! A synthesized dataset (`synth` output) as training tensors: per split, safetensors shards
 //! of frames (`conditions` [N, D] f32, `targets` [N, 3, R, R] f32, for `lbs_residual` also
 //! `bodies` [N, 6, R, R] f32 (the skinned template and its change since the previous frame,
-//! canonical, m), `template_index` [N] i64, `sequence_index` and `frame_index` [N] i64), `templates.safetensors` (`position_maps`
+//! canonical, m; [N, 12, R, R] with `--body-nearest`: then also each skinned texel's offset
+//! to the nearest posed-body point, m, and that point's normal), `template_index` [N] i64, `sequence_index` and `frame_index` [N] i64), `templates.safetensors` (`position_maps`
 //! [G, 3, R, R], `masks` [G, 1, R, R], `inside` [G, 1, R, R]) and `manifest.json` (layout,
 //! normalization statistics of the train split, counts, checksums). Same input, same bytes.
 
@@ -13,12 +14,16 @@ use rayon::prelude::*;
 use safetensors::tensor::{Dtype, TensorView};
 use serde::{Deserialize, Serialize};
 use sim::dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
+use sim::obstacles::MeshSurface;
 use sim::recording::{Recording, TemplateArrays};
 
 use super::conditions::{Block, ConditionLayout, ConditionScaling};
 use super::sequence::Sequence;
 use crate::error::{Result, file_error};
-use crate::geometry::{FrameBody, GeometryImage, RootRemoval, TargetKind, Targets};
+use crate::geometry::{
+    FrameBody, GeometryImage, PosedSurface, RootRemoval, TargetKind, Targets, nearest_body,
+};
+use crate::model::{BODY_CHANNELS, NEAREST_CHANNELS};
 
 /// How a dataset becomes tensors.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -37,6 +42,10 @@ pub struct TensorOptions {
     pub shard_frames: usize,
     /// Condition layout and scaling.
     pub conditions: ConditionScaling,
+    /// Whether the body inputs also hold each texel's offset to the nearest body point and
+    /// its normal (`lbs_residual` only).
+    #[serde(default)]
+    pub nearest: bool,
 }
 
 impl Default for TensorOptions {
@@ -49,6 +58,7 @@ impl Default for TensorOptions {
             root: RootRemoval::Heading,
             shard_frames: 2048,
             conditions: ConditionScaling::Bounded,
+            nearest: false,
         }
     }
 }
@@ -192,14 +202,18 @@ impl TensorManifest {
             && n.conditions.mean.len() == self.condition_dim
             && n.conditions.std.len() == self.condition_dim
             && n.bodies.as_ref().is_none_or(|s| {
-                s.mean.len() == crate::model::BODY_CHANNELS
-                    && s.std.len() == crate::model::BODY_CHANNELS
+                [BODY_CHANNELS, BODY_CHANNELS + NEAREST_CHANNELS].contains(&s.mean.len())
+                    && s.std.len() == s.mean.len()
             })
     }
 
-    /// Whether the shards hold body inputs.
-    pub fn has_bodies(&self) -> bool {
-        self.normalization.bodies.is_some()
+    /// Channels of the shards' body inputs: 0, [`BODY_CHANNELS`], or with the nearest body
+    /// points [`BODY_CHANNELS`] + [`NEAREST_CHANNELS`].
+    pub fn body_channels(&self) -> usize {
+        self.normalization
+            .bodies
+            .as_ref()
+            .map_or(0, |s| s.mean.len())
     }
 
     /// The condition layout the manifest records, on a body model with `betas` shape
@@ -233,20 +247,28 @@ struct Frame {
     frame: usize,
 }
 
-/// The body inputs of a frame as maps, channels first `[6, R, R]` (m, un-normalized): the
-/// template skinned to body `now` and its change since body `before`, both in `now`'s
-/// canonical frame. Training tensors and prediction both call this, so the two paths give
-/// the same inputs.
+/// The body inputs of a frame as maps, channels first (m, un-normalized): the template
+/// skinned to body `now` and its change since body `before`, both in `now`'s canonical frame
+/// (`[6, R, R]`); with `nearest`, `now`'s posed body surface, also each skinned texel's offset
+/// to the nearest body point and that point's normal (`[12, R, R]`). Training tensors and
+/// prediction both call this, so the two paths give the same inputs.
 pub fn body_input_maps(
     targets: &mut Targets,
     image: &GeometryImage,
     model: &BodyModel,
     now: FrameBody,
     before: FrameBody,
+    nearest: Option<&MeshSurface>,
 ) -> Result<Vec<f32>> {
-    let [base, change] = targets.body_inputs(model, now, before)?;
-    let mut out = channels_first(&image.encode(&base)?);
+    let (frame, change) = targets.body_inputs(model, now, before)?;
+    let mut out = channels_first(&image.encode(frame.base())?);
     out.extend(channels_first(&image.encode(&change)?));
+    if let Some(body) = nearest {
+        let skinned = frame.decode(&vec![[0.0; 3]; frame.base().len()]);
+        for map in nearest_body(&skinned, frame.canonical(), body) {
+            out.extend(channels_first(&image.encode(&map)?));
+        }
+    }
     Ok(out)
 }
 
@@ -304,12 +326,23 @@ fn stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
 /// Statistics of the body inputs: per channel for the skinned template; one scale for the
 /// three channels of its change, mean 0 (their root mean square), so a motion sideways that
 /// training rarely saw does not arrive at tens of standard deviations of the sideways channel.
+/// The nearest-body offset is scaled the same way (one root mean square, mean 0); its normal
+/// is a unit vector and stays as it is.
 fn body_stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
     let mut s = stats(sum, sum2, count);
-    let rms = (sum2[3..6].iter().sum::<f64>() / (3.0 * count.max(1.0))).sqrt();
-    for c in 3..6 {
-        s.mean[c] = 0.0;
-        s.std[c] = if rms > 1e-12 { rms } else { 1.0 };
+    let mut one_scale = |channels: std::ops::Range<usize>, rms: Option<f64>| {
+        let rms = rms.unwrap_or_else(|| {
+            (sum2[channels.clone()].iter().sum::<f64>() / (3.0 * count.max(1.0))).sqrt()
+        });
+        for c in channels {
+            s.mean[c] = 0.0;
+            s.std[c] = if rms > 1e-12 { rms } else { 1.0 };
+        }
+    };
+    one_scale(3..6, None);
+    if sum.len() == BODY_CHANNELS + NEAREST_CHANNELS {
+        one_scale(6..9, None);
+        one_scale(9..12, Some(1.0));
     }
     s
 }
@@ -364,6 +397,12 @@ pub fn write_tensors(
         scaling: options.conditions,
     };
     let with_bodies = options.target == TargetKind::LbsResidual;
+    if options.nearest && !with_bodies {
+        return Err(crate::error::Error::Invalid(
+            "nearest-body inputs need the lbs_residual target (they extend its body inputs)".into(),
+        ));
+    }
+    let body_channels = BODY_CHANNELS + if options.nearest { NEAREST_CHANNELS } else { 0 };
     // Templates by garment name, from the recordings (sorted names give the indices).
     let mut names: Vec<&str> = records.iter().map(|r| r.garment.as_str()).collect();
     names.sort_unstable();
@@ -401,7 +440,7 @@ pub fn write_tensors(
     let dim = layout.dim();
     let (mut t_sum, mut t_sum2, mut t_count) = (vec![0.0; 3], vec![0.0; 3], 0.0);
     let (mut c_sum, mut c_sum2, mut c_count) = (vec![0.0; dim], vec![0.0; dim], 0.0);
-    let (mut b_sum, mut b_sum2) = (vec![0.0; 6], vec![0.0; 6]);
+    let (mut b_sum, mut b_sum2) = (vec![0.0; body_channels], vec![0.0; body_channels]);
     let mut train_templates = vec![false; templates.len()];
     for split in SPLITS {
         let members: Vec<usize> = (0..records.len())
@@ -426,6 +465,7 @@ pub fn write_tensors(
                     options.root,
                 )?;
                 let motion = s.motion()?;
+                let mut surface = PosedSurface::default();
                 let mut out = Vec::new();
                 for k in (s.first_motion_frame()..s.len()).step_by(options.every.max(1)) {
                     let condition = layout.vector(&motion, k, &s.betas[k], &s.meta.material)?;
@@ -433,7 +473,11 @@ pub fn write_tensors(
                     let map = image.encode(&target).map_err(|e| file_error(path, e))?;
                     let bodies = if with_bodies {
                         let before = s.body(k.saturating_sub(1));
-                        body_input_maps(&mut targets, image, model, s.body(k), before)
+                        let nearest = match options.nearest {
+                            true => Some(surface.at(model, s.body(k))?),
+                            false => None,
+                        };
+                        body_input_maps(&mut targets, image, model, s.body(k), before, nearest)
                             .map_err(|e| file_error(path, e))?
                     } else {
                         Vec::new()
@@ -513,7 +557,7 @@ pub fn write_tensors(
                 tensors.push((
                     "bodies",
                     Dtype::F32,
-                    vec![count, 6, r, r],
+                    vec![count, body_channels, r, r],
                     f32_bytes(&bodies),
                 ));
             }

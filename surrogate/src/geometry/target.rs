@@ -72,6 +72,16 @@ pub struct FrameBase {
 }
 
 impl FrameBase {
+    /// The frame's canonical map.
+    pub fn canonical(&self) -> &Canonical {
+        &self.canonical
+    }
+
+    /// The base positions (canonical, m): the skinned template or the rest template.
+    pub fn base(&self) -> &[[f64; 3]] {
+        &self.base
+    }
+
     /// The cloth (world, m) a per-vertex target stands for.
     pub fn decode(&self, target: &[[f64; 3]]) -> Vec<[f64; 3]> {
         target
@@ -159,13 +169,14 @@ impl Targets {
     /// The body inputs of a frame (body `now`, previous frame's body `before`), per vertex
     /// in the frame's canonical frame, m: the template skinned to the body, and its change
     /// since the previous frame (both skinned templates in `now`'s canonical frame, so the
-    /// root's own motion is in it). Only an `lbs_residual` target has the skinning.
+    /// root's own motion is in it), the first as `now`'s [`FrameBase`]. Only an
+    /// `lbs_residual` target has the skinning.
     pub fn body_inputs(
         &mut self,
         model: &BodyModel,
         now: FrameBody,
         before: FrameBody,
-    ) -> Result<[Vec<[f64; 3]>; 2]> {
+    ) -> Result<(FrameBase, Vec<[f64; 3]>)> {
         if self.skinning.is_none() {
             return Err(crate::error::Error::Invalid(
                 "body inputs need the lbs_residual target's skinning".into(),
@@ -179,7 +190,7 @@ impl Targets {
             .into_iter()
             .map(|d| [-d[0], -d[1], -d[2]])
             .collect();
-        Ok([current.base, change])
+        Ok((current, change))
     }
 
     /// The per-vertex target of a frame whose cloth is at `garment` (world, m).

@@ -11,6 +11,10 @@ pub const INPUT_CHANNELS: usize = 7;
 /// Channels the body inputs add: the skinned base (canonical, 3) and its change since the
 /// previous frame (3).
 pub const BODY_CHANNELS: usize = 6;
+/// Channels the nearest-body inputs add to the body inputs: the offset from the skinned
+/// template to the nearest point of the posed body (canonical, 3) and that point's outward
+/// normal (3).
+pub const NEAREST_CHANNELS: usize = 6;
 /// Channels of its output: the velocity of the target map, or the map itself.
 pub const OUTPUT_CHANNELS: usize = 3;
 /// Width of the sinusoidal timestep features (Sana's and DiT's 256).
@@ -81,6 +85,11 @@ pub struct DitConfig {
     /// saved configuration without the key has none).
     #[serde(default)]
     pub body_inputs: bool,
+    /// Whether the body inputs also hold, per texel, the offset to the nearest point of the
+    /// posed body and its normal, 6 more channels (needs `body_inputs`; a saved configuration
+    /// without the key has none).
+    #[serde(default)]
+    pub body_nearest: bool,
 }
 
 impl Default for DitConfig {
@@ -102,6 +111,7 @@ impl Default for DitConfig {
             depthwise: Depthwise::Conv2d,
             prediction: Prediction::Data,
             body_inputs: true,
+            body_nearest: false,
         }
     }
 }
@@ -140,12 +150,29 @@ impl DitConfig {
         if self.condition_dim == 0 || self.condition_dim > 1 << 16 {
             return bad("condition_dim", &self.condition_dim, "must be 1 to 65536");
         }
+        if self.body_nearest && !self.body_inputs {
+            return bad(
+                "body_nearest",
+                &self.body_nearest,
+                "needs model.body_inputs = true (the nearest-body channels extend them)",
+            );
+        }
         Ok(())
+    }
+
+    /// Channels of the body inputs the model takes: 0, [`BODY_CHANNELS`], or those and
+    /// [`NEAREST_CHANNELS`].
+    pub fn body_channels(&self) -> usize {
+        match (self.body_inputs, self.body_nearest) {
+            (false, _) => 0,
+            (true, false) => BODY_CHANNELS,
+            (true, true) => BODY_CHANNELS + NEAREST_CHANNELS,
+        }
     }
 
     /// Channels of the input image: noisy target, position map (plus the body inputs), mask.
     pub fn input_channels(&self) -> usize {
-        INPUT_CHANNELS + if self.body_inputs { BODY_CHANNELS } else { 0 }
+        INPUT_CHANNELS + self.body_channels()
     }
 
     /// Channels of the per-texel inputs that come with the template and the body: the
@@ -183,5 +210,13 @@ mod tests {
             ..DitConfig::default()
         };
         assert!(c.validate().unwrap_err().starts_with("model.patch = 3"));
+        c = DitConfig {
+            body_inputs: false,
+            body_nearest: true,
+            ..DitConfig::default()
+        };
+        assert!(c.validate().unwrap_err().starts_with("model.body_nearest"));
+        c.body_inputs = true;
+        assert_eq!(c.input_channels(), INPUT_CHANNELS + 12);
     }
 }

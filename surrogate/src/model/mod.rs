@@ -7,7 +7,8 @@ mod dit;
 mod layers;
 
 pub use config::{
-    BODY_CHANNELS, Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, OUTPUT_CHANNELS, Prediction,
+    BODY_CHANNELS, Depthwise, DitConfig, FREQUENCY_DIM, INPUT_CHANNELS, NEAREST_CHANNELS,
+    OUTPUT_CHANNELS, Prediction,
 };
 pub use dit::{Block, ConditionEmbedder, Dit, TimestepEmbedder};
 pub use layers::{CrossAttention, DepthwiseConv, LinearAttention, MixFfn, norm, timestep_features};

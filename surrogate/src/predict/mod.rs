@@ -382,16 +382,46 @@ impl<'a> Predictor<'a> {
         frames: &[usize],
     ) -> Result<NetworkInputs> {
         let mut targets = garment.targets.clone();
-        Ok(self.inputs_of(garment, &mut targets, seq, frames)?.1)
+        let mut surfaces = Vec::new();
+        if self.trained.config.model.body_nearest {
+            let posed = posed_bodies(self.body, seq, frames)?;
+            self.refit(&posed, frames, &mut surfaces)?;
+        }
+        Ok(self
+            .inputs_of(garment, &mut targets, seq, frames, &surfaces)?
+            .1)
     }
 
-    /// The frames' bases and network inputs.
+    /// Fits `surfaces` (grown as needed) to the posed bodies of `frames`, one each.
+    fn refit(
+        &self,
+        posed: &[Vec<[f64; 3]>],
+        frames: &[usize],
+        surfaces: &mut Vec<MeshSurface>,
+    ) -> Result<()> {
+        for (i, (vertices, k)) in posed.iter().zip(frames).enumerate() {
+            let v: Vec<sim::Vec3> = vertices.iter().map(|p| sim::Vec3::from(*p)).collect();
+            match surfaces.get_mut(i) {
+                Some(surface) => surface.update(&v, &vec![sim::Vec3::zeros(); v.len()]),
+                None => surfaces.push(MeshSurface::new(
+                    &format!("body of frame {k}"),
+                    &v,
+                    self.body.faces(),
+                )?),
+            }
+        }
+        Ok(())
+    }
+
+    /// The frames' bases and network inputs; `surfaces` are the frames' posed bodies when the
+    /// model takes the nearest-body inputs.
     fn inputs_of(
         &self,
         garment: &PreparedGarment,
         targets: &mut Targets,
         seq: &BodySequence,
         frames: &[usize],
+        surfaces: &[MeshSurface],
     ) -> Result<(Vec<FrameBase>, NetworkInputs)> {
         let data = &self.trained.data;
         let plane = data.resolution.pow(2);
@@ -409,7 +439,7 @@ impl<'a> Predictor<'a> {
             texels: Vec::with_capacity(frames.len() * model.texel_channels() * plane),
             conditions: Vec::with_capacity(frames.len() * data.condition_dim),
         };
-        for &k in frames {
+        for (i, &k) in frames.iter().enumerate() {
             inputs.texels.extend_from_slice(&garment.position);
             if model.body_inputs {
                 let bodies = stats.bodies.as_ref().ok_or_else(|| {
@@ -419,8 +449,15 @@ impl<'a> Predictor<'a> {
                     )
                 })?;
                 let before = body_of(k.saturating_sub(1));
-                let mut maps =
-                    body_input_maps(targets, &garment.image, self.body, body_of(k), before)?;
+                let nearest = model.body_nearest.then(|| &surfaces[i]);
+                let mut maps = body_input_maps(
+                    targets,
+                    &garment.image,
+                    self.body,
+                    body_of(k),
+                    before,
+                    nearest,
+                )?;
                 bodies.normalize(&mut maps, plane);
                 inputs.texels.extend(maps);
             }
@@ -448,8 +485,19 @@ impl<'a> Predictor<'a> {
         let data = &self.trained.data;
         let (r, dim) = (data.resolution, data.condition_dim);
         let plane = r * r;
+        let posed = posed_bodies(self.body, seq, chunk)?;
+        let tests_after = settings.inside_test || settings.resolve_penetration;
+        let guided = (0..settings.steps).any(|k| settings.guidance.guides(k, settings.steps))
+            || (settings.guidance.weight > 0.0 && settings.guidance.refine > 0);
+        let surfaced = if tests_after || guided || self.trained.config.model.body_nearest {
+            posed.len()
+        } else {
+            0
+        };
+        self.refit(&posed[..surfaced], chunk, surfaces)?;
         let mut targets = garment.targets.clone();
-        let (bases, inputs) = self.inputs_of(garment, &mut targets, seq, chunk)?;
+        let (bases, inputs) =
+            self.inputs_of(garment, &mut targets, seq, chunk, &surfaces[..surfaced])?;
         let device = &self.trained.device;
         let grid = time_grid(settings.steps, settings.shift);
         let targets_stats = &data.normalization.targets;
@@ -474,26 +522,6 @@ impl<'a> Predictor<'a> {
             }
             noise
         };
-        let posed = posed_bodies(self.body, seq, chunk)?;
-        let tests_after = settings.inside_test || settings.resolve_penetration;
-        let guided = (0..settings.steps).any(|k| settings.guidance.guides(k, settings.steps))
-            || (settings.guidance.weight > 0.0 && settings.guidance.refine > 0);
-        let surfaced = if tests_after || guided {
-            posed.len()
-        } else {
-            0
-        };
-        for (i, (vertices, k)) in posed.iter().zip(chunk).enumerate().take(surfaced) {
-            let v: Vec<sim::Vec3> = vertices.iter().map(|p| sim::Vec3::from(*p)).collect();
-            match surfaces.get_mut(i) {
-                Some(surface) => surface.update(&v, &vec![sim::Vec3::zeros(); v.len()]),
-                None => surfaces.push(MeshSurface::new(
-                    &format!("body of frame {k}"),
-                    &v,
-                    self.body.faces(),
-                )?),
-            }
-        }
         let surfaces = &surfaces[..surfaced];
         let repeat =
             |one: &[f32]| -> Vec<f32> { (0..b).flat_map(|_| one.iter().copied()).collect() };

@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::config::{Objective, TimeSampling, TrainConfig};
 use crate::data::{Frames, TrainingTensors};
-use crate::model::{BODY_CHANNELS, DitConfig, Prediction};
+use crate::model::{DitConfig, Prediction};
 use crate::noise::{generator, normal};
 
 /// Stream of the training batches.
@@ -41,8 +41,8 @@ pub struct Recipe {
     pub prediction: Prediction,
     /// Targets zeroed outside the loss mask before noising.
     pub zero_outside: bool,
-    /// The texel inputs include the body channels.
-    pub body_inputs: bool,
+    /// Body channels the texel inputs include (the first ones of the tensors' body inputs).
+    pub body_channels: usize,
 }
 
 impl Recipe {
@@ -52,7 +52,7 @@ impl Recipe {
             inside_weight: training.inside_weight as f32,
             prediction: model.prediction,
             zero_outside: training.zero_outside,
-            body_inputs: model.body_inputs,
+            body_channels: model.body_channels(),
         }
     }
 }
@@ -93,8 +93,9 @@ impl Batch {
             inside_weight,
             prediction,
             zero_outside,
-            body_inputs,
+            body_channels,
         } = recipe;
+        let stored = tensors.manifest.body_channels();
         let r = tensors.resolution();
         let plane = r * r;
         let d = tensors.manifest.condition_dim;
@@ -122,10 +123,10 @@ impl Batch {
             }
             b.position
                 .extend_from_slice(&tensors.position_maps[g * 3 * plane..(g + 1) * 3 * plane]);
-            if body_inputs {
-                let n = BODY_CHANNELS * plane;
+            if body_channels > 0 {
+                let at = f * stored * plane;
                 b.position
-                    .extend_from_slice(&split.bodies[f * n..(f + 1) * n]);
+                    .extend_from_slice(&split.bodies[at..at + body_channels * plane]);
             }
             let inside = &tensors.inside[g * plane..(g + 1) * plane];
             b.mask.extend_from_slice(mask);

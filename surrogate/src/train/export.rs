@@ -114,8 +114,12 @@ impl TrainedModel {
             ))
         } else if !data.normalization_fits() {
             Some("normalization statistics of the wrong length".into())
-        } else if m.body_inputs && !data.has_bodies() {
-            Some("the model takes body inputs and these tensors have none".into())
+        } else if m.body_channels() > data.body_channels() {
+            Some(format!(
+                "the model takes {} body input channels and these tensors have {}",
+                m.body_channels(),
+                data.body_channels()
+            ))
         } else {
             None
         };

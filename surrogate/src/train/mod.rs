@@ -199,11 +199,15 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         path: "the training configuration".into(),
         message,
     })?;
-    if config.model.body_inputs && !tensors.manifest.has_bodies() {
+    let (wanted, stored) = (
+        config.model.body_channels(),
+        tensors.manifest.body_channels(),
+    );
+    if wanted > stored {
         return Err(Error::Config {
             path: "the training configuration".into(),
             message: format!(
-                "model.body_inputs = true, but the tensors in {} have no body inputs (made with the displacement target, or before format 2): remake them or set it to false",
+                "the model takes {wanted} body input channels (model.body_inputs, model.body_nearest), but the tensors in {} have {stored} (body inputs need the lbs_residual target, the nearest-body ones `dataset tensors --body-nearest`): remake them or turn the keys off",
                 options.data.display()
             ),
         });
