@@ -13,7 +13,6 @@ use sim::obstacles::AnimatedMesh;
 use sim::recording::Recording;
 
 use crate::cli::ColourBy;
-use crate::inputs;
 use crate::output::write_atomic;
 
 /// Reach of the penetration query, m: deeper points are found by the unbounded query.
@@ -45,7 +44,7 @@ impl<'a> Sequence<'a> {
             bail!("{}: the recording has no garment frames", path.display());
         }
         let body_faces = if with_body {
-            inputs::recorded_body(model, &recording, 0, path)?.faces
+            recording.body_at(model, 0, path)?.faces
         } else {
             Vec::new()
         };
@@ -64,7 +63,7 @@ impl<'a> Sequence<'a> {
 
     fn meshes(&self, k: usize) -> Result<FrameMeshes> {
         let body = if self.with_body {
-            to_f32(&inputs::recorded_body(self.model, &self.recording, k, self.path)?.vertices)
+            to_f32(&self.recording.body_at(self.model, k, self.path)?.vertices)
         } else {
             Vec::new()
         };

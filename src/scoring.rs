@@ -8,8 +8,6 @@ use motions::BodyModel;
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores, jitter};
 use sim::recording::Recording;
 
-use crate::inputs;
-
 /// B scored against A: the mean of every 5th frame, each frame's scores, and both jitters.
 pub struct Compared {
     pub mean: Scores,
@@ -50,7 +48,7 @@ pub fn score(a_path: &Path, b_path: &Path, model: &BodyModel, seed: u64) -> Resu
         |f: &[[f32; 3]]| -> Vec<[f64; 3]> { f.iter().map(|p| p.map(|c| c as f64)).collect() };
     let mut per_frame = Vec::new();
     for k in (0..frames).step_by(FRAME_STRIDE) {
-        let body = inputs::recorded_body(model, &a, k, a_path)?;
+        let body = a.body_at(model, k, a_path)?;
         let surface = BodySurface {
             vertices: &body.vertices,
             triangles: &body.faces,

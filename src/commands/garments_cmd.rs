@@ -109,8 +109,13 @@ fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
     if design.index == 0 {
         say!("{}: {} ({} split)", base.name, base.description, base.split);
     } else {
+        let kind = if design.wide {
+            "wide variant"
+        } else {
+            "variant"
+        };
         say!(
-            "{}: variant {} of {} ({})",
+            "{}: {kind} {} of {} ({})",
             design.name,
             design.index,
             base.name,

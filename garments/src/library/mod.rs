@@ -11,7 +11,7 @@
 use serde_json::{Value, json};
 
 mod variants;
-pub use variants::{MAX_INDEX, NamedDesign, SEPARATOR, naming, resolve};
+pub use variants::{MAX_INDEX, NamedDesign, naming, resolve, variant_name};
 
 use crate::error::Result;
 use crate::pattern::{Curve, Pattern, SpecFile};

@@ -1,23 +1,30 @@
 //! Variants of the library's designs: `tshirt_regular~3` is variant 3 of `tshirt_regular`,
-//! its measurements drawn around the base design's. The name is the whole recipe (the draw is
-//! seeded by the base's name and the index), so the same name sews the same design in every
-//! command and on every machine.
+//! its measurements drawn around the base design's; `tshirt_regular~w3` is its wide variant
+//! 3, a design of another kind drawn over the library's whole range. The name is the whole
+//! recipe (the draw is seeded by the base's name, the kind and the index), so the same name
+//! sews the same design in every command and on every machine.
 //!
 //! Why: the surrogate generalizes to unseen designs by what its training designs span, and a
 //! 19-design library spans little (docs/SURROGATE.md, "The ablation"). A variant keeps its
 //! base's family: the neckline type and whether it has sleeves never change, and every
 //! measurement moves by at most a few cm (a sleeve by 15% of its length), so a variant of a
-//! t-shirt is a t-shirt of another cut.
+//! t-shirt is a t-shirt of another cut. Such variants did not help unseen designs, whose
+//! neckline, sleeve length or hem no training design had; a wide variant keeps only whether
+//! its base has sleeves and draws every measurement and the neckline type over the range the
+//! library's designs span, so the training designs cover the space the library's kinds sit in.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::{DESIGNS, Design, DesignParams};
+use super::{DESIGNS, Design, DesignParams, Neckline};
 use crate::error::Result;
 use crate::pattern::Pattern;
 
 /// Between a base design's name and its variant's index.
-pub const SEPARATOR: char = '~';
+pub(crate) const SEPARATOR: char = '~';
+
+/// Marks a wide variant: `base~wK`.
+pub(crate) const WIDE: char = 'w';
 
 /// The largest variant index.
 pub const MAX_INDEX: u32 = 9999;
@@ -31,6 +38,8 @@ pub struct NamedDesign {
     pub base: &'static Design,
     /// The variant's index; 0 for the base design itself.
     pub index: u32,
+    /// Whether it is a wide variant (`base~wK`).
+    pub wide: bool,
     /// Its measurements.
     pub params: DesignParams,
 }
@@ -45,33 +54,53 @@ impl NamedDesign {
 /// What a design name may be, for error messages: the library's names or a variant's form.
 pub fn naming() -> String {
     format!(
-        "{}; or a variant NAME{SEPARATOR}K, K in 1..={MAX_INDEX}",
+        "{}; or a variant NAME{SEPARATOR}K or a wide variant NAME{SEPARATOR}{WIDE}K, K in 1..={MAX_INDEX}",
         super::design_names().join(", ")
     )
 }
 
-/// The design called `name`: a library design, or `base~k` with k in 1..=[`MAX_INDEX`].
+/// The name of variant `index` of `base` (wide or not).
+pub fn variant_name(base: &str, index: u32, wide: bool) -> String {
+    let mark = if wide {
+        WIDE.to_string()
+    } else {
+        String::new()
+    };
+    format!("{base}{SEPARATOR}{mark}{index}")
+}
+
+/// The design called `name`: a library design, or `base~k` or `base~wk` with k in
+/// 1..=[`MAX_INDEX`].
 pub fn resolve(name: &str) -> Option<NamedDesign> {
-    let (base_name, index) = match name.split_once(SEPARATOR) {
-        None => (name, 0),
+    let (base_name, index, wide) = match name.split_once(SEPARATOR) {
+        None => (name, 0, false),
         Some((base, k)) => {
+            let (k, wide) = match k.strip_prefix(WIDE) {
+                Some(k) => (k, true),
+                None => (k, false),
+            };
             // Digits only, no sign or leading zero, so one design has one name.
             if k.is_empty() || k.starts_with('0') || !k.bytes().all(|b| b.is_ascii_digit()) {
                 return None;
             }
-            (base, k.parse::<u32>().ok().filter(|&k| k <= MAX_INDEX)?)
+            (
+                base,
+                k.parse::<u32>().ok().filter(|&k| k <= MAX_INDEX)?,
+                wide,
+            )
         }
     };
     let base = DESIGNS.iter().find(|d| d.name == base_name)?;
-    let params = if index == 0 {
-        base.params
-    } else {
-        jittered(base, index)
+    let params = match (index, wide) {
+        (0, _) => base.params,
+        (_, false) => jittered(base, index),
+        (_, true) => wide_draw(base, index),
     };
     Some(NamedDesign {
         name: name.to_string(),
         base,
         index,
+        wide,
         params,
     })
 }
@@ -103,6 +132,38 @@ fn jittered(base: &Design, index: u32) -> DesignParams {
     if p.sleeve_length > 0.0 {
         v.sleeve_length = (p.sleeve_length * draw(1.0, 0.15, 0.15)).max(6.0);
         v.cuff_half_width = draw(p.cuff_half_width, 1.5, 1.5).max(8.0);
+    }
+    v
+}
+
+/// Wide variant `index` of `base`: whether it has sleeves is its base's; everything else is
+/// drawn uniformly over the range the library's designs span (cm), the neckline type among
+/// all three. Widths are drawn from the chest out, so the hem is never narrower than the
+/// chest allows and a loose hem comes with a loose chest as often as with a tight one.
+fn wide_draw(base: &Design, index: u32) -> DesignParams {
+    let seed = name_seed(base.name) ^ ((index as u64) << 32) ^ 0x5749_4445; // "WIDE"
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut uniform = |low: f64, high: f64| rng.random_range(low..=high);
+    let mut v = base.params;
+    v.hem_height = uniform(40.0, 106.0);
+    v.chest_half_width = uniform(24.5, 32.0);
+    v.hem_half_width = uniform(
+        v.chest_half_width - 1.0,
+        (v.chest_half_width + 14.0).min(44.0),
+    );
+    v.armhole_drop = uniform(0.0, 4.0);
+    v.shoulder_half_width = uniform(15.0, 20.0);
+    v.neck_half_width = uniform(10.0, 14.0);
+    v.back_neck_depth = uniform(2.5, 5.0);
+    v.front_neck_depth = uniform(4.0, 18.0);
+    v.neckline = match uniform(0.0, 3.0) {
+        x if x < 1.0 => Neckline::Round,
+        x if x < 2.0 => Neckline::V,
+        _ => Neckline::Scoop,
+    };
+    if base.params.sleeve_length > 0.0 {
+        v.sleeve_length = uniform(9.0, 57.0);
+        v.cuff_half_width = uniform(9.0, 19.0);
     }
     v
 }
@@ -143,6 +204,37 @@ mod tests {
         }
     }
 
+    /// Wide variants keep only whether their base has sleeves, stay in the library's range,
+    /// sew, and over a few draws bring every neckline type to a design that had one.
+    #[test]
+    fn wide_variants_span_the_library_and_sew() {
+        let mut necklines = Vec::new();
+        for base in DESIGNS.iter().filter(|d| d.split == "train") {
+            let name = variant_name(base.name, 1, true);
+            assert_eq!(name, format!("{}~w1", base.name));
+            let v = resolve(&name).unwrap();
+            assert!(v.wide && v.index == 1, "{name}");
+            assert_eq!(v, resolve(&name).unwrap(), "{name}: not deterministic");
+            assert_ne!(
+                v.params,
+                resolve(&variant_name(base.name, 1, false)).unwrap().params
+            );
+            let (p, b) = (v.params, base.params);
+            assert_eq!(p.sleeve_length > 0.0, b.sleeve_length > 0.0, "{name}");
+            assert!((40.0..=106.0).contains(&p.hem_height), "{name}");
+            assert!(p.hem_half_width >= p.chest_half_width - 1.0 && p.hem_half_width <= 44.0);
+            if p.sleeve_length > 0.0 {
+                assert!((9.0..=57.0).contains(&p.sleeve_length), "{name}");
+            }
+            necklines.push(p.neckline);
+            let pattern = v.pattern().unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(pattern.name, name);
+        }
+        for line in [Neckline::Round, Neckline::V, Neckline::Scoop] {
+            assert!(necklines.contains(&line), "no {line:?} in {necklines:?}");
+        }
+    }
+
     #[test]
     fn malformed_variant_names_resolve_to_nothing() {
         for bad in [
@@ -154,11 +246,17 @@ mod tests {
             "tshirt_regular~1.5",
             "tshirt_regular~10000",
             "tshirt_regular~1~2",
+            "tshirt_regular~w",
+            "tshirt_regular~w0",
+            "tshirt_regular~ww1",
+            "tshirt_regular~W1",
+            "tshirt_regular~1w",
             "no_such_design~1",
             "~1",
         ] {
             assert!(resolve(bad).is_none(), "{bad}");
         }
         assert!(resolve("tshirt_regular~9999").is_some());
+        assert!(resolve("tshirt_regular~w9999").is_some());
     }
 }

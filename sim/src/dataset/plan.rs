@@ -301,6 +301,7 @@ mod tests {
             name: name.into(),
             split,
             variants: 0,
+            wide_variants: 0,
         };
         let m = |source: &str, split| MotionEntry {
             source: source.into(),
@@ -378,6 +379,9 @@ mod tests {
     fn garment_variants_are_drawn_with_their_entry_split() {
         let mut spec = spec();
         spec.garments[0].variants = 3;
+        spec.garments[0].wide_variants = 2;
+        let names: Vec<String> = spec.garments[0].names().collect();
+        assert_eq!(names, ["a", "a~1", "a~2", "a~3", "a~w1", "a~w2"]);
         let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
         let train: std::collections::BTreeSet<&str> = planned
             .iter()
@@ -385,7 +389,7 @@ mod tests {
             .map(|p| p.garment.as_str())
             .collect();
         assert!(train.iter().any(|g| g.starts_with("a~")), "{train:?}");
-        let allowed = ["a", "a~1", "a~2", "a~3", "b"];
+        let allowed = ["a", "a~1", "a~2", "a~3", "a~w1", "a~w2", "b"];
         assert!(train.iter().all(|g| allowed.contains(g)), "{train:?}");
         for p in planned.iter().filter(|p| p.split == "test") {
             assert_eq!(p.garment, "c");

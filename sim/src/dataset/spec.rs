@@ -201,6 +201,10 @@ pub struct GarmentEntry {
     /// design with this split: `garments::library::resolve`); 0, the design alone.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub variants: u32,
+    /// Wide variants joined after them (`name~w1` ..= `name~wN`: designs of other kinds drawn
+    /// over the library's range, keeping only whether the design has sleeves); 0, none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub wide_variants: u32,
 }
 
 fn is_zero(n: &u32) -> bool {
@@ -208,12 +212,12 @@ fn is_zero(n: &u32) -> bool {
 }
 
 impl GarmentEntry {
-    /// The garment's names: the entry's, then its variants'.
+    /// The garment's names: the entry's, then its variants', then its wide variants'.
     pub fn names(&self) -> impl Iterator<Item = String> + '_ {
-        std::iter::once(self.name.clone()).chain(
-            (1..=self.variants)
-                .map(|k| format!("{}{}{k}", self.name, garments::library::SEPARATOR)),
-        )
+        let variant = |wide| move |k| garments::library::variant_name(&self.name, k, wide);
+        std::iter::once(self.name.clone())
+            .chain((1..=self.variants).map(variant(false)))
+            .chain((1..=self.wide_variants).map(variant(true)))
     }
 }
 
@@ -403,22 +407,23 @@ impl DatasetSpec {
             }
         }
         for g in &self.garments {
-            if g.variants == 0 {
-                continue;
-            }
-            if garments::library::find(&g.name).is_none() {
-                return Err(format!(
-                    "garments: '{}' has variants = {}, but only a library design has variants",
-                    g.name, g.variants
-                ));
-            }
-            if g.variants > garments::library::MAX_INDEX {
-                return Err(format!(
-                    "garments: '{}' has variants = {} (at most {})",
-                    g.name,
-                    g.variants,
-                    garments::library::MAX_INDEX
-                ));
+            for (key, n) in [("variants", g.variants), ("wide_variants", g.wide_variants)] {
+                if n == 0 {
+                    continue;
+                }
+                if garments::library::find(&g.name).is_none() {
+                    return Err(format!(
+                        "garments: '{}' has {key} = {n}, but only a library design has variants",
+                        g.name
+                    ));
+                }
+                if n > garments::library::MAX_INDEX {
+                    return Err(format!(
+                        "garments: '{}' has {key} = {n} (at most {})",
+                        g.name,
+                        garments::library::MAX_INDEX
+                    ));
+                }
             }
         }
         let has = |tag: Tag| self.garments.iter().any(|e| e.split == tag);

@@ -10,7 +10,7 @@ mod reader;
 mod stats;
 mod writer;
 
-pub use reader::Recording;
+pub use reader::{RecordedBody, Recording};
 pub use stats::FrameStats;
 pub use writer::{Channels, FrameRecord, SequenceWriter};
 

@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use motions::BodyModel;
+
 use super::FrameStats;
 use super::mcap_read::{MAGIC, messages};
 use super::*;
@@ -27,7 +29,63 @@ pub struct Recording {
     pub stats: Vec<FrameStats>,
 }
 
+/// The body of one recorded frame.
+#[derive(Debug, Clone)]
+pub struct RecordedBody {
+    /// Vertex positions, m.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles.
+    pub faces: Vec<[u32; 3]>,
+}
+
 impl Recording {
+    /// The body of frame `k`: the recorded vertices if the recording has them, else `model`
+    /// posed with the frame's recorded pose, translation and shape. The triangles (recorded,
+    /// else the model's) are checked against the vertex count, so a wrong body model is
+    /// named; `path` names the recording in errors.
+    pub fn body_at(&self, model: &BodyModel, k: usize, path: &Path) -> Result<RecordedBody> {
+        let fail = |message: String| Error::Recording {
+            path: path.display().to_string(),
+            message,
+        };
+        let vertices = if let Some(v) = self.body.get(k) {
+            v.iter().map(|p| p.map(|c| c as f64)).collect()
+        } else {
+            let pose = self
+                .poses
+                .get(k)
+                .ok_or_else(|| fail(format!("frame {k} has no body pose")))?;
+            let pose_values: [f64; 72] = pose.pose.as_slice().try_into().map_err(|_| {
+                fail(format!(
+                    "frame {k} has {} pose values, not 72",
+                    pose.pose.len()
+                ))
+            })?;
+            let shaped = model.shape(&pose.betas)?;
+            let frame = motions::FramePose {
+                pose: pose_values,
+                transl: pose.transl,
+            };
+            model.pose(&shaped, &frame)?.vertices
+        };
+        let faces = if self.body_faces.is_empty() {
+            model.faces().to_vec()
+        } else {
+            self.body_faces.clone()
+        };
+        if faces
+            .iter()
+            .flatten()
+            .any(|&i| i as usize >= vertices.len())
+        {
+            return Err(fail(
+                "the body model does not match the recording's body (pass the right --body-model)"
+                    .into(),
+            ));
+        }
+        Ok(RecordedBody { vertices, faces })
+    }
+
     /// Reads a whole recording; truncated or foreign files get an error naming the file.
     pub fn read(path: &Path) -> Result<Self> {
         let bytes = files::read(path, files::limits::RECORDING, "recording")?;
