@@ -1,33 +1,11 @@
-//! Turning flags into real objects: the body model, a motion (built-in name or AMASS file), and
-//! body parameter files. Every error names the file or value at fault.
+//! Turning flags into real objects: a garment (with a notice when its template is first made)
+//! and body parameter files. Every error names the file or value at fault.
 
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use motions::library::MotionSpec;
-use motions::{BodyModel, Motion, POSE_DIM, ShapedBody};
+use motions::{BodyModel, POSE_DIM};
 use serde::Deserialize;
-
-/// The body model named by `--model`, or the default body.
-pub fn body_model(path: Option<&Path>) -> Result<BodyModel> {
-    match path {
-        Some(p) => Ok(BodyModel::load(p)?),
-        None => Ok(BodyModel::default_body()),
-    }
-}
-
-/// A motion at 30 fps: a built-in name (with optional parameters) generated for `shaped`, or an
-/// AMASS `.npz` file resampled by time.
-pub fn motion(source: &str, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
-    let path = Path::new(source);
-    if source.ends_with(".npz") || path.exists() {
-        let raw = motions::amass::load(path, shaped.joints[0])?;
-        return raw
-            .resample(30.0)
-            .with_context(|| format!("resampling {source} to 30 fps"));
-    }
-    Ok(MotionSpec::parse(source)?.generate(model, shaped)?)
-}
 
 /// Body parameters from a `--params` JSON file.
 #[derive(Debug, Default, Deserialize)]
@@ -80,52 +58,17 @@ impl BodyParams {
     }
 }
 
-/// A garment template and its body attachments: a library design (sewn on `model` once and
-/// cached, see [`library_template`]), the built-in skirt fitted to `model` and draped
-/// ([`sim::scene::builtin_template`]), or an OBJ file with UVs (checked and repaired, no
-/// attachments).
+/// A garment template and its body attachments ([`sim::sources::garment`]), a library
+/// design's made on first use and cached in the cache folder, with a notice when it is made.
 pub fn garment(
     source: &str,
     model: &BodyModel,
 ) -> Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
-    if let Some(design) = garments::library::resolve(source) {
-        return Ok((library_template(&design, model)?, Vec::new()));
-    }
-    let path = Path::new(source);
-    if source.ends_with(".obj") || path.exists() {
-        let (raw, numbers) = garments::read_obj_numbered(path)?;
-        let (template, _) = garments::repair_numbered(&raw, 1.0, Some(&numbers))
-            .map_err(|e| anyhow::anyhow!("garment file {source}: {e}"))?;
-        return Ok((template, Vec::new()));
-    }
-    if !garments::BUILTIN.contains(&source) {
-        bail!(
-            "unknown garment '{source}': not a library design ({}), a built-in ({}) or a file",
-            garments::library::naming(),
-            garments::BUILTIN.join(", ")
-        );
-    }
-    sim::scene::builtin_template(model, source, &garments::SkirtParams::default())
-        .with_context(|| format!("preparing built-in garment '{source}'"))
-}
-
-/// A library design's (or a variant's) template on `model`, made on first use and cached in
-/// the cache folder ([`sim::templates::library_template`]).
-pub fn library_template(
-    design: &garments::library::NamedDesign,
-    model: &BodyModel,
-) -> Result<garments::Garment> {
     let cache = sim::templates::cache_dir();
-    Ok(sim::templates::library_template(
-        design,
-        model,
-        &cache,
-        |path| {
-            eprintln!(
-                "making the template of '{}' (first use; cached in {})",
-                design.name,
-                path.display()
-            )
-        },
-    )?)
+    Ok(sim::sources::garment(source, model, &cache, |path| {
+        eprintln!(
+            "making the template of '{source}' (first use; cached in {})",
+            path.display()
+        )
+    })?)
 }

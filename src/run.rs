@@ -10,12 +10,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use motions::BodyModel;
 use serde_json::json;
 use sim::SceneConfig;
 use sim::recording::Recording;
 use sim::run::Prepared;
-use sim::scene::{BodyAttachment, FrameOutput, RunSummary};
+use sim::scene::{FrameOutput, RunSummary};
 
 use crate::cli::SceneArgs;
 use crate::inputs;
@@ -129,22 +128,16 @@ pub fn print_config(args: &SceneArgs, config: &SceneConfig) -> Result<bool> {
 
 /// Loads what the configuration names (body model, garment, motion) and builds its scene.
 pub fn prepare(config: SceneConfig) -> Result<Prepared> {
-    let model = Arc::new(inputs::body_model(config.model.as_deref().map(Path::new))?);
+    let model = Arc::new(sim::sources::body_model(
+        config.model.as_deref().map(Path::new),
+    )?);
     let (garment, attachments) = inputs::garment(&config.garment, &model)?;
-    prepare_with(model, Arc::new(garment), attachments, config)
-}
-
-/// A scene on a loaded model and template; the configuration gives the motion, shape and
-/// settings (its garment and model keys name what was loaded).
-pub fn prepare_with(
-    model: Arc<BodyModel>,
-    garment: Arc<garments::Garment>,
-    attachments: Vec<BodyAttachment>,
-    config: SceneConfig,
-) -> Result<Prepared> {
-    let shaped = model.shape(&config.betas)?;
-    let motion = inputs::motion(&config.motion, &model, &shaped)?;
-    Ok(Prepared::new(model, garment, attachments, motion, config)?)
+    Ok(Prepared::with_motion_of(
+        model,
+        Arc::new(garment),
+        attachments,
+        config,
+    )?)
 }
 
 /// How a run shows itself and what it writes besides the recording.
@@ -156,16 +149,6 @@ pub struct RecordOptions<'a> {
     pub quiet: bool,
     /// Stop with [`sim::Error::Deadline`] when the run is still going at this moment.
     pub deadline: Option<Instant>,
-}
-
-/// Whether an error is a run stopped by its deadline.
-pub fn is_deadline(error: &anyhow::Error) -> bool {
-    error.chain().any(|e| {
-        matches!(
-            e.downcast_ref::<sim::Error>(),
-            Some(sim::Error::Deadline { .. })
-        )
-    })
 }
 
 /// Runs a prepared scene into `out` (atomically), with a progress bar and OBJ frames as
@@ -181,25 +164,20 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
     if options.quiet {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    let mut summary = None;
-    write_atomic(out, |w| {
-        let s = p.record(w, &software, options.deadline, |frame| {
-            if let Some((dir, every)) = options.obj
-                && frame.index % every.max(1) == 0
-            {
-                write_frame_objs(dir, p, frame).map_err(|e| sim::Error::Recording {
-                    path: dir.display().to_string(),
-                    message: format!("{e:#}"),
-                })?;
-            }
-            bar.inc(1);
-            Ok(())
-        })?;
-        summary = Some(s);
+    let summary = p.record_file(out, &software, options.deadline, |frame| {
+        if let Some((dir, every)) = options.obj
+            && frame.index % every.max(1) == 0
+        {
+            write_frame_objs(dir, p, frame).map_err(|e| sim::Error::Recording {
+                path: dir.display().to_string(),
+                message: format!("{e:#}"),
+            })?;
+        }
+        bar.inc(1);
         Ok(())
     })?;
     bar.finish_and_clear();
-    summary.context("the run produced no summary")
+    Ok(summary)
 }
 
 fn write_frame_objs(dir: &Path, p: &Prepared, frame: &FrameOutput) -> Result<()> {

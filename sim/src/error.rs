@@ -115,6 +115,15 @@ pub enum Error {
         /// What went wrong.
         problem: String,
     },
+    /// A library design's template, once sewn and settled, failed its quality gates (a
+    /// drawn design can: synthesis records its sequences as failed rather than stopping).
+    #[error("garment '{garment}': the template failed its quality gates: {failed}")]
+    TemplateGates {
+        /// The design's name.
+        garment: String,
+        /// The gates it failed.
+        failed: String,
+    },
     /// The global matrix could not be factorized (should not happen for valid input).
     #[error("factorization of the global matrix failed ({stage}): {message}")]
     Factorization {

@@ -29,6 +29,7 @@ mod self_contact;
 mod self_intersection;
 pub mod sewing;
 mod solver;
+pub mod sources;
 mod spin_join;
 mod system;
 pub mod templates;

@@ -4,6 +4,7 @@
 //! the recording goes (a temporary file renamed into place) is the caller's.
 
 use std::io::{Seek, Write};
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -41,6 +42,54 @@ impl Prepared {
             garment,
             scene,
         })
+    }
+
+    /// The scene of `config` on a loaded model and template, its motion loaded by the
+    /// configuration's `motion` key ([`crate::sources::motion`]) for its shape.
+    pub fn with_motion_of(
+        model: Arc<BodyModel>,
+        garment: Arc<garments::Garment>,
+        attachments: Vec<BodyAttachment>,
+        config: SceneConfig,
+    ) -> Result<Self> {
+        let shaped = model.shape(&config.betas)?;
+        let motion = crate::sources::motion(&config.motion, &model, &shaped)?;
+        Self::new(model, garment, attachments, motion, config)
+    }
+
+    /// [`Self::record`] into the file at `path` (its folder made if missing), atomically:
+    /// nothing is there unless the run finishes.
+    pub fn record_file(
+        &self,
+        path: &Path,
+        software: &str,
+        deadline: Option<Instant>,
+        each_frame: impl FnMut(&FrameOutput) -> Result<()>,
+    ) -> Result<RunSummary> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::Recording {
+                path: path.display().to_string(),
+                message: format!("cannot create its folder: {e}"),
+            })?;
+        }
+        // The run's own error is kept whole; the I/O error standing in for it only stops the
+        // write (and removes the temporary file).
+        let mut run = None;
+        let written = files::write_with(path, |w| {
+            let result = self.record(w, software, deadline, each_frame);
+            let failed = result.is_err();
+            run = Some(result);
+            match failed {
+                true => Err(std::io::Error::other("the run stopped")),
+                false => Ok(()),
+            }
+        });
+        match (run, written) {
+            (Some(Err(e)), _) => Err(e),
+            (_, Err(e)) => Err(e.into()),
+            (Some(Ok(summary)), Ok(())) => Ok(summary),
+            (None, Ok(())) => unreachable!("write_with succeeds only after calling fill"),
+        }
     }
 
     /// Runs the scene and writes its recording to `out` (template, frames, statistics, and
@@ -113,6 +162,28 @@ mod tests {
             .unwrap();
         let (model, garment) = (Arc::new(model), Arc::new(garment));
         Prepared::new(model, garment, attachments, motion, config).unwrap()
+    }
+
+    /// A finished run's file holds what `record` writes; a run stopped by its deadline
+    /// leaves nothing at the path, not even in a new folder.
+    #[test]
+    fn a_recorded_file_is_whole_or_absent() {
+        let p = skirt(3);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("new/run.mcap");
+        let summary = p.record_file(&path, "test", None, |_| Ok(())).unwrap();
+        assert_eq!(summary.frames, 3);
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        p.record(&mut bytes, "test", None, |_| Ok(())).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), bytes.into_inner());
+        let stopped = dir.path().join("stopped/run.mcap");
+        let e = p.record_file(&stopped, "test", Some(Instant::now()), |_| Ok(()));
+        assert!(matches!(e, Err(Error::Deadline { .. })), "{e:?}");
+        assert!(!stopped.exists());
+        let left: Vec<_> = std::fs::read_dir(dir.path().join("stopped"))
+            .unwrap()
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
     }
 
     #[test]

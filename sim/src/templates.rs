@@ -68,13 +68,10 @@ pub fn library_template(
             .map_err(|e| garment_error(design, e))?;
         let (template, report) = sew(model, &mesh, &SewingOptions::default())?;
         if !report.gates_passed {
-            return Err(garment_error(
-                design,
-                format!(
-                    "the template failed its quality gates: {}",
-                    report.failed.join("; ")
-                ),
-            ));
+            return Err(Error::TemplateGates {
+                garment: design.name.clone(),
+                failed: report.failed.join("; "),
+            });
         }
         write_template(&path, &template)?;
     }

@@ -5,14 +5,14 @@ use motions::{FramePose, POSE_DIM};
 use serde_json::json;
 
 use crate::cli::BodyArgs;
-use crate::inputs::{self, BodyParams};
+use crate::inputs::BodyParams;
 use crate::output::{write_json, write_obj};
 
 pub fn run(args: &BodyArgs) -> Result<()> {
     if args.out.is_none() && args.json.is_none() {
         bail!("nothing to write: give --out FILE.obj and/or --json FILE");
     }
-    let model = inputs::body_model(args.model.body_model.as_deref())?;
+    let model = sim::sources::body_model(args.model.body_model.as_deref())?;
     let params = match &args.params {
         Some(p) => BodyParams::load(p)?,
         None => BodyParams::default(),
@@ -29,7 +29,7 @@ pub fn run(args: &BodyArgs) -> Result<()> {
         frame.transl.copy_from_slice(t);
     }
     if let (Some(source), Some(k)) = (&args.motion, args.frame) {
-        let motion = inputs::motion(source, &model, &shaped)?;
+        let motion = sim::sources::motion(source, &model, &shaped)?;
         let Some(f) = motion.frames.get(k) else {
             bail!(
                 "--frame {k} is past the end of '{source}' ({} frames at 30 fps)",

@@ -6,7 +6,6 @@ use serde_json::json;
 use sim::metrics::{FRAME_STRIDE, Scores};
 
 use crate::cli::CompareArgs;
-use crate::inputs;
 use crate::output::write_json;
 use crate::scoring::score;
 
@@ -37,7 +36,7 @@ fn values(s: &Scores) -> [f64; 9] {
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {
-    let model = inputs::body_model(args.model.body_model.as_deref())?;
+    let model = sim::sources::body_model(args.model.body_model.as_deref())?;
     let c = score(&args.a, &args.b, &model, args.seed)?;
     if args.per_frame {
         for (k, s) in &c.per_frame {

@@ -70,7 +70,7 @@ fn tensors(
     options: &TensorOptions,
     quiet: bool,
 ) -> Result<()> {
-    let model = crate::inputs::body_model(model)?;
+    let model = sim::sources::body_model(model)?;
     let records: Vec<ManifestRecord> =
         files::read_json_lines(&DatasetDir::new(dir).manifest(), "dataset manifest")?;
     let total = records.iter().filter(|r| r.ok()).count();

@@ -22,7 +22,6 @@ use surrogate::predict::{BodySequence, Guidance, Predictor, Settings};
 use surrogate::train::TrainedModel;
 
 use crate::cli::EvaluateArgs;
-use crate::inputs;
 use crate::output::write_json;
 use crate::prediction::model_dir;
 use crate::report::{self, Pictures};
@@ -165,7 +164,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     if let Err(e) = settings.validate() {
         bail!("bad sampler settings: {e}");
     }
-    let body = inputs::body_model(args.body_model.as_deref())?;
+    let body = sim::sources::body_model(args.body_model.as_deref())?;
     let predictor = trained
         .as_ref()
         .map(|t| Predictor::new(t, &body))

@@ -7,7 +7,6 @@ use serde_json::json;
 use sim::recording::{BodySequenceMeta, Channels, FrameRecord, SequenceWriter, UNITS};
 
 use crate::cli::MotionsCommand;
-use crate::inputs;
 use crate::output::{write_atomic, write_json};
 
 pub fn run(command: MotionsCommand) -> Result<()> {
@@ -36,9 +35,9 @@ pub fn run(command: MotionsCommand) -> Result<()> {
                     "{flag} {value}: at most {MAX_PREFIX_FRAMES} (an hour at 30 fps)"
                 );
             }
-            let model = inputs::body_model(model.body_model.as_deref())?;
+            let model = sim::sources::body_model(model.body_model.as_deref())?;
             let shaped = model.shape(&betas)?;
-            let mut m = inputs::motion(&motion, &model, &shaped)?;
+            let mut m = sim::sources::motion(&motion, &model, &shaped)?;
             if blend_frames + settle_frames > 0 {
                 m = m.with_blend_in(
                     &canonical_a_pose(),
@@ -132,9 +131,9 @@ fn show(
     model_path: Option<&std::path::Path>,
     json_path: Option<&std::path::Path>,
 ) -> Result<()> {
-    let model = inputs::body_model(model_path)?;
+    let model = sim::sources::body_model(model_path)?;
     let shaped = model.shape(&[])?;
-    let motion = inputs::motion(source, &model, &shaped)?;
+    let motion = sim::sources::motion(source, &model, &shaped)?;
     let summary = summarize(&motion);
     println!("motion    {}", motion.name);
     println!(

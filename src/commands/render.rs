@@ -8,7 +8,6 @@ use render::{ColourScale, View};
 use serde_json::json;
 
 use crate::cli::{RenderArgs, ViewArgs};
-use crate::inputs;
 use crate::output::write_json;
 use crate::pictures::{RenderJob, render_recording, write_view};
 
@@ -55,7 +54,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.color_by.is_none() && (args.against.is_some() || range.is_some()) {
         bail!("--against and --range need --color-by");
     }
-    let model = inputs::body_model(args.model.body_model.as_deref())?;
+    let model = sim::sources::body_model(args.model.body_model.as_deref())?;
     let job = RenderJob {
         frames: &args.frames,
         views: &views,
@@ -95,7 +94,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 }
 
 pub fn view(args: &ViewArgs) -> Result<()> {
-    let model = inputs::body_model(args.model.body_model.as_deref())?;
+    let model = sim::sources::body_model(args.model.body_model.as_deref())?;
     let started = Instant::now();
     write_view(
         &args.recordings,

@@ -1,34 +1,28 @@
 //! `dit-garment synth`: a dataset from a TOML spec, sequences in parallel, resumable, sharded
 //! by Slurm job arrays or Kubernetes indexed jobs.
 //!
-//! The dataset folder's layout is in `crate::dataset_dir`. Every file is written to a
-//! temporary name and renamed, so a killed run leaves only whole files; a re-run skips
-//! sequences whose record exists and whose recording matches the record's checksum. Each
-//! sequence is a scene configuration built from the spec's per-sequence keys (the same key
-//! names, docs/DATASETS.md), recorded in the sequence's metadata.
+//! One sequence's run (retries, gates), the folder's layout and its checks are
+//! `sim::dataset`'s; this command picks the shard's sequences, runs them in parallel with a
+//! progress bar and prints. Every file is written to a temporary name and renamed, so a killed
+//! run leaves only whole files; a re-run skips sequences whose record exists and whose
+//! recording matches the record's checksum.
 
 use std::collections::HashMap;
-use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use motions::BodyModel;
 use rayon::prelude::*;
 use serde_json::json;
 use sim::dataset::{
-    Attempt, DatasetDir, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, expand_motions,
+    DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence, Synthesis, expand_motions,
     finished_record, plan,
 };
-use sim::scene::BodyAttachment;
-use sim::{SceneConfig, SolverParams};
 
 use crate::cli::SynthArgs;
-use crate::inputs;
-use crate::output::{write_atomic, write_json};
-use crate::run::{RecordOptions, is_deadline, prepare_with, record};
+use crate::output::write_json;
 
 /// The tiny example spec (4 sequences of 30 frames).
 pub const TINY_SPEC: &str = include_str!("../../specs/tiny.toml");
@@ -79,197 +73,6 @@ fn shard(args: &SynthArgs) -> Result<(usize, usize)> {
     Ok((k, n))
 }
 
-/// Removes what killed runs left: temporary files of this shard's sequences.
-fn remove_leftovers(dir: &DatasetDir, ids: &[&str]) -> Result<usize> {
-    let mut removed = 0;
-    for folder in ["sequences", "records"] {
-        let path = dir.root.join(folder);
-        let Ok(entries) = std::fs::read_dir(&path) else {
-            continue;
-        };
-        for entry in entries.flatten() {
-            let name = entry.file_name().to_string_lossy().into_owned();
-            if name.ends_with(".tmp")
-                && ids.iter().any(|id| {
-                    name.starts_with(&format!("{id}.mcap."))
-                        || name.starts_with(&format!("{id}.json."))
-                })
-            {
-                std::fs::remove_file(entry.path())?;
-                removed += 1;
-            }
-        }
-    }
-    Ok(removed)
-}
-
-/// What every sequence of a run shares.
-struct RunContext<'a> {
-    spec: &'a DatasetSpec,
-    dir: &'a DatasetDir,
-    model: Arc<BodyModel>,
-    /// The `--model` file, recorded in every sequence's configuration.
-    model_file: Option<String>,
-    templates: HashMap<String, (Arc<garments::Garment>, Vec<BodyAttachment>)>,
-    software: String,
-}
-
-/// Simulates one sequence (with retries) into its recording and record.
-fn synthesize(ctx: &RunContext, p: &PlannedSequence) -> Result<ManifestRecord> {
-    let spec = ctx.spec;
-    let (garment, attachments) = &ctx.templates[&p.garment];
-    let file = DatasetDir::sequence_file(&p.id);
-    let path = ctx.dir.root.join(&file);
-    let settings = std::iter::once((spec.solver.substeps, spec.solver.max_iterations)).chain(
-        std::iter::repeat_n(
-            (spec.gates.retry_substeps, spec.gates.retry_iterations),
-            spec.gates.retries,
-        ),
-    );
-    let mut attempts = Vec::new();
-    let mut frames = 0;
-    let started = Instant::now();
-    for (substeps, iterations) in settings {
-        // The recording always belongs to the last attempt that finished.
-        let _ = std::fs::remove_file(&path);
-        let config = SceneConfig {
-            garment: p.garment.clone(),
-            motion: p.motion.clone(),
-            model: ctx.model_file.clone(),
-            betas: p.betas.clone(),
-            friction: p.friction,
-            frames: spec.sequence.frames,
-            blend_frames: spec.sequence.blend_frames,
-            settle_frames: spec.sequence.settle_frames,
-            seed: Some(p.seed),
-            material: p.material,
-            solver: SolverParams {
-                substeps,
-                max_iterations: iterations,
-                self_contact: spec.solver.self_contact,
-                self_contact_distance: spec.solver.self_contact_distance,
-                self_friction: spec.solver.self_friction,
-                acceleration: spec.solver.acceleration,
-                ..SolverParams::default()
-            },
-            record: sim::config::RecordConfig::default(),
-        };
-        let solver = config.solver;
-        let attempt_started = Instant::now();
-        let prepared = prepare_with(
-            ctx.model.clone(),
-            garment.clone(),
-            attachments.clone(),
-            config,
-        );
-        let gates = match prepared {
-            Err(e) => GateResult::unfinished(format!("could not set up: {e:#}"), false),
-            Ok(prepared) => {
-                frames = prepared.scene.num_frames();
-                let options = RecordOptions {
-                    quiet: true,
-                    deadline: Some(attempt_started + Duration::from_secs_f64(spec.gates.timeout_s)),
-                    ..RecordOptions::default()
-                };
-                match record(&prepared, &path, options) {
-                    Ok(summary) => GateResult::judge(&summary, &spec.gates),
-                    Err(e) if is_deadline(&e) => GateResult::unfinished(
-                        format!("time-out after {} s", spec.gates.timeout_s),
-                        true,
-                    ),
-                    Err(e) => GateResult::unfinished(format!("solver: {e:#}"), false),
-                }
-            }
-        };
-        let passed = gates.passed;
-        attempts.push(Attempt {
-            solver,
-            gates,
-            wall_s: attempt_started.elapsed().as_secs_f64(),
-        });
-        if passed {
-            break;
-        }
-    }
-    let last = attempts.last().expect("at least one attempt");
-    let ok = last.gates.passed;
-    let (file, sha256, bytes) = if path.exists() {
-        let (sha, bytes) = files::sha256_file(&path)?;
-        (Some(file), Some(sha), bytes)
-    } else {
-        (None, None, 0)
-    };
-    Ok(ManifestRecord {
-        id: p.id.clone(),
-        split: p.split.clone(),
-        garment: p.garment.clone(),
-        motion: p.motion.clone(),
-        betas: p.betas.clone(),
-        material: p.material,
-        friction: p.friction,
-        seed: p.seed,
-        frames,
-        vertices: garment.positions.len(),
-        status: if ok { "ok" } else { "failed" }.into(),
-        reason: (!ok).then(|| last.gates.failed.join("; ")),
-        attempts,
-        file,
-        sha256,
-        bytes,
-        software: ctx.software.clone(),
-        wall_s: started.elapsed().as_secs_f64(),
-    })
-}
-
-/// Refuses a folder that holds another spec's dataset.
-fn check_spec(dir: &DatasetDir, spec: &DatasetSpec) -> Result<()> {
-    let path = dir.spec();
-    if path.exists() && &DatasetSpec::load(&path)? != spec {
-        bail!(
-            "{} holds a dataset of a different spec (its spec.toml differs); use another --out",
-            dir.root.display()
-        );
-    }
-    Ok(())
-}
-
-/// Stores the spec in the folder (checked by [`check_spec`] first).
-fn store_spec(dir: &DatasetDir, spec: &DatasetSpec) -> Result<()> {
-    let path = dir.spec();
-    if path.exists() {
-        return Ok(());
-    }
-    write_atomic(&path, |w| {
-        w.write_all(spec.to_toml().as_bytes())?;
-        Ok(())
-    })
-}
-
-/// Writes the manifest when every planned sequence has a record (from `known`, this run's,
-/// else from the folder); returns the missing count.
-fn write_manifest(
-    dir: &DatasetDir,
-    planned: &[PlannedSequence],
-    known: &HashMap<String, ManifestRecord>,
-) -> Result<usize> {
-    let mut records = Vec::with_capacity(planned.len());
-    let mut missing = 0;
-    for p in planned {
-        match known
-            .get(&p.id)
-            .cloned()
-            .or_else(|| finished_record(dir, &p.id))
-        {
-            Some(r) => records.push(r),
-            None => missing += 1,
-        }
-    }
-    if missing == 0 {
-        files::write_json_lines(&dir.manifest(), &records)?;
-    }
-    Ok(missing)
-}
-
 pub fn run(args: &SynthArgs) -> Result<()> {
     let max = crate::run::MAX_THREADS;
     if let Some(jobs) = args.jobs.filter(|&j| j > max) {
@@ -296,11 +99,11 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let dir = DatasetDir::new(out);
     // Everything the spec names is checked before the folder is touched, so a refused spec
     // (a typo in a motion or garment, another spec's folder) leaves the folder as it was.
-    check_spec(&dir, &spec)?;
-    let model = Arc::new(inputs::body_model(args.model.body_model.as_deref())?);
+    dir.check_spec(&spec)?;
+    let model = Arc::new(sim::sources::body_model(args.model.body_model.as_deref())?);
     let neutral = model.shape(&[])?;
     for (source, _) in &motions {
-        inputs::motion(source, &model, &neutral)
+        sim::sources::motion(source, &model, &neutral)
             .with_context(|| format!("{}: motion '{source}'", spec_path.display()))?;
     }
     let mine: Vec<&PlannedSequence> = planned
@@ -313,20 +116,48 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let mut names: Vec<&String> = mine.iter().map(|p| &p.garment).collect();
     names.sort();
     names.dedup();
+    // A template that fails its gates (a drawn design can) makes its sequences fail, not the
+    // run; any other problem with a garment stops the run before the folder is touched.
+    let cache = sim::templates::cache_dir();
     let made = names
         .par_iter()
         .map(|name| {
-            let (garment, attachments) = inputs::garment(name, &model)
-                .with_context(|| format!("{}: garment '{name}'", spec_path.display()))?;
-            Ok(((*name).clone(), (Arc::new(garment), attachments)))
+            let template = sim::sources::garment(name, &model, &cache, |path| {
+                eprintln!(
+                    "making the template of '{name}' (first use; cached in {})",
+                    path.display()
+                )
+            });
+            match template {
+                Ok((garment, attachments)) => {
+                    Ok(((*name).clone(), Ok((Arc::new(garment), attachments))))
+                }
+                Err(e @ sim::Error::TemplateGates { .. }) => {
+                    Ok(((*name).clone(), Err(e.to_string())))
+                }
+                Err(e) => Err(anyhow::Error::from(e).context(spec_path.display().to_string())),
+            }
         })
         .collect::<Result<Vec<_>>>()?;
+    let mut templates = HashMap::new();
+    let mut unusable = HashMap::new();
+    for (name, template) in made {
+        match template {
+            Ok(t) => {
+                templates.insert(name, t);
+            }
+            Err(why) => {
+                eprintln!("  {why}: its sequences are recorded as failed");
+                unusable.insert(name, why);
+            }
+        }
+    }
     std::fs::create_dir_all(&dir.root)
         .with_context(|| format!("cannot create {}", dir.root.display()))?;
-    store_spec(&dir, &spec)?;
+    dir.store_spec(&spec)?;
     files::write_json_lines(&dir.plan(), &planned)?;
     let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
-    let leftovers = remove_leftovers(&dir, &ids)?;
+    let leftovers = dir.remove_leftovers(&ids)?;
     // Finished sequences (checked against their checksums once) and the rest.
     let mut known = HashMap::new();
     let mut todo: Vec<&PlannedSequence> = Vec::new();
@@ -350,14 +181,13 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             String::new()
         }
     );
-    for (name, (garment, _)) in &made {
+    for (name, (garment, _)) in &templates {
         let template_path = dir.template(name);
         if !template_path.exists() {
             sim::templates::write_template(&template_path, garment)?;
         }
     }
-    let templates: HashMap<_, _> = made.into_iter().collect();
-    let ctx = RunContext {
+    let synthesis = Synthesis {
         spec: &spec,
         dir: &dir,
         model,
@@ -367,6 +197,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             .as_ref()
             .map(|m| m.display().to_string()),
         templates,
+        unusable,
         software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
     };
     let jobs = args
@@ -388,7 +219,9 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let made = pool.install(|| {
         todo.par_iter()
             .map(|p| -> Result<ManifestRecord> {
-                let record = synthesize(&ctx, p).with_context(|| format!("sequence {}", p.id))?;
+                let record = synthesis
+                    .sequence(p)
+                    .with_context(|| format!("sequence {}", p.id))?;
                 write_json(&dir.record(&p.id), &record)?;
                 let done = frames_done.fetch_add(record.frames, Ordering::Relaxed) + record.frames;
                 if !record.ok() {
@@ -425,7 +258,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let wall = started.elapsed().as_secs_f64();
     let frames = frames_done.load(Ordering::Relaxed);
     let failed = failed.load(Ordering::Relaxed);
-    let missing = write_manifest(&dir, &planned, &known)?;
+    let missing = dir.write_manifest(&planned, &known)?;
     let summary = json!({
         "name": spec.name, "shard": [k, n], "planned": planned.len(), "shard_sequences": mine.len(),
         "simulated": todo.len(), "skipped": mine.len() - todo.len(), "failed": failed,

@@ -78,7 +78,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
         "full" => RootRemoval::Full,
         _ => RootRemoval::Heading,
     };
-    let model = inputs::body_model(args.model.body_model.as_deref())?;
+    let model = sim::sources::body_model(args.model.body_model.as_deref())?;
     let is_recording = args.source.ends_with(".mcap");
     let (template, sequence) = if is_recording {
         let sequence = Sequence::read(Path::new(&args.source))?;

@@ -3,14 +3,15 @@
 //! splits), each judged by quality gates and recorded in a JSON Lines manifest.
 //!
 //! This module is the plain data ([`DatasetSpec`], [`plan`], [`ManifestRecord`],
-//! [`GateResult`]), the folder's layout ([`DatasetDir`], [`finished_record`]) and its
-//! verification ([`verify`]). Running the sequences (parallelism, shards, resume) is still the
-//! command line's part.
+//! [`GateResult`]), the folder's layout ([`DatasetDir`], [`finished_record`]), running one
+//! sequence with its retries and gates ([`Synthesis`]) and verification ([`verify`]). Which
+//! sequences a process runs (shards) and in how many threads is the command line's part.
 
 mod dir;
 mod manifest;
 mod plan;
 mod spec;
+mod synth;
 mod verify;
 
 pub use dir::{DatasetDir, finished_record};
@@ -20,4 +21,5 @@ pub use spec::{
     DatasetSpec, GarmentEntry, GateSpec, MaterialRanges, MotionEntry, SequenceSpec, SolverSpec,
     SplitSpec, Tag,
 };
+pub use synth::{Synthesis, Template};
 pub use verify::{Verification, load, verify};

@@ -1,0 +1,95 @@
+//! What a scene configuration names, loaded: the body model, a motion (a built-in name with
+//! optional parameters, or an AMASS file) and a garment template (a library design or variant,
+//! the built-in skirt, or an OBJ file). The command line, dataset synthesis and the surrogate's
+//! tools load through here, so a name means the same thing in every command.
+
+use std::path::Path;
+
+use motions::library::MotionSpec;
+use motions::{BodyModel, Motion, ShapedBody};
+
+use crate::error::{Error, Result};
+use crate::scene::BodyAttachment;
+
+/// The body model in `path`, or the default body (CC0) without one.
+pub fn body_model(path: Option<&Path>) -> Result<BodyModel> {
+    match path {
+        Some(p) => Ok(BodyModel::load(p)?),
+        None => Ok(BodyModel::default_body()),
+    }
+}
+
+/// A motion at 30 fps: a built-in name (with optional parameters) generated for `shaped`, or an
+/// AMASS `.npz` file resampled by time.
+pub fn motion(source: &str, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
+    let path = Path::new(source);
+    if source.ends_with(".npz") || path.exists() {
+        let raw = motions::amass::load(path, shaped.joints[0])?;
+        return raw.resample(30.0).map_err(|e| Error::Config {
+            path: source.to_string(),
+            message: format!("resampling to 30 fps: {e}"),
+        });
+    }
+    Ok(MotionSpec::parse(source)?.generate(model, shaped)?)
+}
+
+/// A garment template and its body attachments: a library design (sewn on `model` once and
+/// cached in `cache`, [`crate::templates::library_template`], `making` told the cache path
+/// when it is made), the built-in skirt fitted to `model` and draped
+/// ([`crate::scene::builtin_template`]), or an OBJ file with UVs (checked and repaired, no
+/// attachments).
+pub fn garment(
+    source: &str,
+    model: &BodyModel,
+    cache: &Path,
+    making: impl FnOnce(&Path),
+) -> Result<(garments::Garment, Vec<BodyAttachment>)> {
+    let fail = |problem: String| Error::Garment {
+        garment: source.to_string(),
+        problem,
+    };
+    if let Some(design) = garments::library::resolve(source) {
+        let template = crate::templates::library_template(&design, model, cache, making)?;
+        return Ok((template, Vec::new()));
+    }
+    let path = Path::new(source);
+    if source.ends_with(".obj") || path.exists() {
+        let (raw, numbers) =
+            garments::read_obj_numbered(path).map_err(|e| fail(format!("garment file: {e}")))?;
+        let (template, _) = garments::repair_numbered(&raw, 1.0, Some(&numbers))
+            .map_err(|e| fail(format!("garment file: {e}")))?;
+        return Ok((template, Vec::new()));
+    }
+    if !garments::BUILTIN.contains(&source) {
+        return Err(fail(format!(
+            "unknown garment: not a library design ({}), a built-in ({}) or a file",
+            garments::library::naming(),
+            garments::BUILTIN.join(", ")
+        )));
+    }
+    crate::scene::builtin_template(model, source, &garments::SkirtParams::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_resolve_or_are_refused_by_name() {
+        let model = BodyModel::default_body();
+        let shaped = model.shape(&[]).unwrap();
+        let walk = motion("walk", &model, &shaped).unwrap();
+        assert!(walk.len() > 10);
+        let fast = motion("walk:speed=1.5", &model, &shaped).unwrap();
+        assert_ne!(fast.frames[5], walk.frames[5]);
+        assert!(motion("moonwalk", &model, &shaped).is_err());
+        let cache = tempfile::tempdir().unwrap();
+        let e = garment("cape", &model, cache.path(), |_| {}).unwrap_err();
+        assert!(
+            e.to_string().starts_with("garment 'cape': unknown garment"),
+            "{e}"
+        );
+        let e = garment("missing.obj", &model, cache.path(), |_| {}).unwrap_err();
+        assert!(e.to_string().contains("garment file"), "{e}");
+    }
+}
