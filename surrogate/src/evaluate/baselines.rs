@@ -26,6 +26,18 @@ pub struct FloorMaps {
     pub root: RootRemoval,
 }
 
+impl Default for FloorMaps {
+    /// The shipped model's maps (64 x 64, `lbs_residual`, heading removed): the floor of a
+    /// run without a model.
+    fn default() -> Self {
+        Self {
+            resolution: 64,
+            target: TargetKind::LbsResidual,
+            root: RootRemoval::Heading,
+        }
+    }
+}
+
 /// Which baseline.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Baseline {

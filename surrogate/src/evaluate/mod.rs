@@ -9,7 +9,10 @@
 //! jitter over all motion frames.
 
 pub mod baselines;
+mod protocol;
 pub mod tables;
+
+pub use protocol::{Evaluation, select};
 
 use serde::{Deserialize, Serialize};
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores, jitter};

@@ -1,0 +1,213 @@
+//! The evaluation protocol over a dataset folder: which sequences a run scores (finished ones
+//! of the asked splits, in manifest order), each sequence's recording checked against the
+//! manifest and scored with every method (the baselines, the model with and without
+//! guidance), and a sequence's result reused when it was made with the same settings on the
+//! same recording. Threads, progress and files are the caller's.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use motions::BodyModel;
+use serde_json::{Value, json};
+use sim::dataset::ManifestRecord;
+
+use super::baselines::{self, Baseline, FloorMaps};
+use super::tables::SequenceResult;
+use super::{Method, Truth};
+use crate::data::Sequence;
+use crate::error::{Error, Result, file_error};
+use crate::predict::{BodySequence, Guidance, Predictor, Settings};
+
+impl Baseline {
+    /// The baseline a name asks for (`lbs`, `lbs_nearest`, `floor` with `floor`'s maps,
+    /// `rest`), with its method.
+    pub fn parse(name: &str, floor: FloorMaps) -> Result<(Method, Baseline)> {
+        Ok(match name {
+            "lbs" => (Method::Lbs, Baseline::Lbs),
+            "lbs_nearest" => (Method::LbsNearest, Baseline::LbsNearest),
+            "floor" => (Method::Floor, Baseline::Floor(floor)),
+            "rest" => (Method::Rest, Baseline::Rest),
+            other => {
+                return Err(Error::Invalid(format!(
+                    "unknown baseline '{other}' (lbs, lbs_nearest, floor, rest)"
+                )));
+            }
+        })
+    }
+}
+
+/// The finished sequences of `splits` (each split once, in the order asked; at most `max` of
+/// each), from the records of the manifest at `manifest`. None, or an id that is not a plain
+/// file name (results are cached by id), is an error naming the manifest.
+pub fn select(
+    all: &[ManifestRecord],
+    splits: &[String],
+    max: Option<usize>,
+    manifest: &Path,
+) -> Result<Vec<ManifestRecord>> {
+    let mut records = Vec::new();
+    let mut asked: Vec<&String> = Vec::new();
+    for split in splits {
+        if asked.contains(&split) {
+            continue;
+        }
+        asked.push(split);
+        let of_split = all.iter().filter(|r| r.ok() && &r.split == split).cloned();
+        records.extend(of_split.take(max.unwrap_or(usize::MAX)));
+    }
+    if let Some(bad) = records
+        .iter()
+        .find(|r| r.id.is_empty() || r.id.contains(['/', '\\']) || r.id.starts_with('.'))
+    {
+        let problem = format!("sequence id '{}' is not a plain file name", bad.id);
+        return Err(file_error(manifest, problem));
+    }
+    if records.is_empty() {
+        let problem = format!("no finished sequences in the splits {}", splits.join(", "));
+        return Err(file_error(manifest, problem));
+    }
+    Ok(records)
+}
+
+/// What scoring a sequence needs.
+pub struct Evaluation<'a> {
+    /// The dataset folder the records' files are in.
+    pub data: &'a Path,
+    /// The body model.
+    pub body: &'a BodyModel,
+    /// The model, if one is scored.
+    pub predictor: Option<&'a Predictor<'a>>,
+    /// The sampler's settings (its guidance weight is the `model` row's; `model_no_guidance`
+    /// has none).
+    pub settings: Settings,
+    /// The baselines scored.
+    pub baselines: Vec<(Method, Baseline)>,
+    /// What makes a result: the run's settings (a cached result with other settings is made
+    /// again).
+    pub fingerprint: Value,
+}
+
+impl Evaluation<'_> {
+    /// Scores one sequence with every method; its recording must match the manifest's
+    /// checksum.
+    pub fn sequence(&self, record: &ManifestRecord) -> Result<SequenceResult> {
+        let file = record.file.as_deref().ok_or_else(|| {
+            Error::Invalid(format!("sequence {} has no recording", record.id))
+        })?;
+        let path = self.data.join(file);
+        if let Some(expected) = &record.sha256 {
+            let (sha, _) = files::sha256_file(&path)?;
+            if &sha != expected {
+                let problem = "does not match the manifest's checksum (damaged or replaced)";
+                return Err(file_error(&path, problem));
+            }
+        }
+        let seq = Sequence::read(&path)?;
+        let truth = Truth::new(&seq, self.body, 0).map_err(|e| file_error(&path, e))?;
+        let frames = truth.frames();
+        let mut methods = BTreeMap::new();
+        for &(method, b) in &self.baselines {
+            let started = Instant::now();
+            let predicted = baselines::predict(b, self.body, &seq, frames)?;
+            let fps = frames.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
+            methods.insert(method, truth.score(&predicted, fps));
+        }
+        if let Some(predictor) = self.predictor {
+            let mut garment = predictor.garment(&seq.template)?;
+            let motion = seq.motion()?;
+            let body = BodySequence {
+                motion: &motion,
+                betas: &seq.betas,
+                material: seq.meta.material,
+            };
+            let range = frames[0]..frames[frames.len() - 1] + 1;
+            for (method, weight) in [
+                (Method::Model, self.settings.guidance.weight),
+                (Method::ModelNoGuidance, 0.0),
+            ] {
+                let settings = Settings {
+                    guidance: Guidance {
+                        weight,
+                        ..self.settings.guidance
+                    },
+                    ..self.settings
+                };
+                let mut predicted = Vec::with_capacity(frames.len());
+                let timing =
+                    predictor.predict(&mut garment, &body, range.clone(), &settings, &mut |f| {
+                        predicted.push(f.garment.clone());
+                        Ok(())
+                    })?;
+                let fps = frames.len() as f64 / timing.wall_s.max(1e-9);
+                methods.insert(method, truth.score(&predicted, fps));
+            }
+        }
+        Ok(SequenceResult {
+            id: record.id.clone(),
+            split: record.split.clone(),
+            garment: record.garment.clone(),
+            motion: record.motion.clone(),
+            file: file.to_string(),
+            settings: self.settings_of(record),
+            methods,
+            simulation: truth.simulation(),
+        })
+    }
+
+    /// A result cached at `path` that was made with this run's settings on the same
+    /// recording, if any.
+    pub fn cached(&self, path: &Path, record: &ManifestRecord) -> Option<SequenceResult> {
+        let text = std::fs::read_to_string(path).ok()?;
+        let r: SequenceResult = serde_json::from_str(&text).ok()?;
+        (r.settings == self.settings_of(record) && r.split == record.split).then_some(r)
+    }
+
+    /// The settings of one sequence's rows: the run's, and the recording they scored.
+    fn settings_of(&self, record: &ManifestRecord) -> Value {
+        json!({"run": self.fingerprint, "file": record.file, "sha256": record.sha256, "split": record.split})
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(id: &str, split: &str, ok: bool) -> ManifestRecord {
+        let mut r: ManifestRecord = serde_json::from_value(json!({
+            "id": id, "split": split, "garment": "skirt", "motion": "walk", "betas": [],
+            "material": {"stretch": 100.0, "density": 0.2, "bending": 1e-6}, "friction": 0.3,
+            "seed": 1, "frames": 10, "vertices": 4, "status": "ok", "attempts": [],
+            "bytes": 0, "software": "test", "wall_s": 0.0
+        }))
+        .unwrap();
+        if !ok {
+            r.status = "failed".into();
+        }
+        r
+    }
+
+    #[test]
+    fn selection_keeps_finished_sequences_of_the_asked_splits_once() {
+        let all = [
+            record("a", "test", true),
+            record("b", "test", false),
+            record("c", "train", true),
+            record("d", "test", true),
+        ];
+        let manifest = Path::new("m.jsonl");
+        let splits = |s: &[&str]| s.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let ids = |r: Vec<ManifestRecord>| r.into_iter().map(|r| r.id).collect::<Vec<_>>();
+        let picked = select(&all, &splits(&["test", "train", "test"]), None, manifest);
+        assert_eq!(ids(picked.unwrap()), ["a", "d", "c"]);
+        let one = select(&all, &splits(&["test"]), Some(1), manifest).unwrap();
+        assert_eq!(ids(one), ["a"]);
+        let e = select(&all, &splits(&["nope"]), None, manifest).unwrap_err();
+        assert!(e.to_string().contains("no finished sequences"), "{e}");
+        let bad = [record("../x", "test", true)];
+        let e = select(&bad, &splits(&["test"]), None, manifest).unwrap_err();
+        assert!(e.to_string().contains("not a plain file name"), "{e}");
+        let e = Baseline::parse("knn", FloorMaps::default()).unwrap_err();
+        assert!(e.to_string().contains("unknown baseline 'knn'"), "{e}");
+    }
+}
