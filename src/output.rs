@@ -8,7 +8,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-/// Writes `path` through `fill`, atomically ([`files::write_with`]; parent folders created).
+/// Writes `path` through `fill`, atomically ([`files::write_fallible`]; parent folders
+/// created).
 pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
@@ -17,19 +18,7 @@ pub fn write_atomic(
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create folder {}", dir.display()))?;
     }
-    // `fill`'s own error is kept whole; the I/O error standing in for it only stops the write.
-    let mut failure = None;
-    let written = files::write_with(path, |w| {
-        fill(w).map_err(|e| {
-            failure = Some(e);
-            std::io::Error::other("not completed")
-        })
-    });
-    match failure {
-        Some(e) => Err(e),
-        None => written.map_err(anyhow::Error::from),
-    }
-    .with_context(|| format!("writing {}", path.display()))
+    files::write_fallible(path, fill).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Writes a value as pretty JSON, atomically.

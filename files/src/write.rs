@@ -30,6 +30,25 @@ pub fn write_with(
     tmp.persist()
 }
 
+/// [`write_with`] for a `fill` with its own error type: a failed fill's error comes back
+/// whole (the write stops and leaves nothing), a failed write as `E::from`.
+pub fn write_fallible<E: From<Error>>(
+    path: &Path,
+    fill: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), E>,
+) -> std::result::Result<(), E> {
+    let mut failure = None;
+    let written = write_with(path, |w| {
+        fill(w).map_err(|e| {
+            failure = Some(e);
+            std::io::Error::other("not completed")
+        })
+    });
+    match failure {
+        Some(e) => Err(e),
+        None => written.map_err(E::from),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -48,5 +67,35 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         write_atomic(&path, b"new").unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+    }
+
+    #[derive(Debug, PartialEq)]
+    enum Fill {
+        Stopped(u32),
+        Write(String),
+    }
+
+    impl From<Error> for Fill {
+        fn from(e: Error) -> Self {
+            Fill::Write(e.to_string())
+        }
+    }
+
+    #[test]
+    fn a_fallible_fill_keeps_its_own_error_and_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.txt");
+        let failed = write_fallible(&path, |w| {
+            w.write_all(b"half").map_err(|e| Fill::Write(e.to_string()))?;
+            Err(Fill::Stopped(7))
+        });
+        assert_eq!(failed, Err(Fill::Stopped(7)));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let missing = dir.path().join("no/such/folder/out.txt");
+        let e = write_fallible(&missing, |_| Ok::<(), Fill>(())).unwrap_err();
+        assert!(matches!(e, Fill::Write(_)), "{e:?}");
+        write_fallible(&path, |w| w.write_all(b"whole").map_err(|e| Fill::Write(e.to_string())))
+            .unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "whole");
     }
 }

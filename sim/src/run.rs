@@ -72,24 +72,12 @@ impl Prepared {
                 message: format!("cannot create its folder: {e}"),
             })?;
         }
-        // The run's own error is kept whole; the I/O error standing in for it only stops the
-        // write (and removes the temporary file).
-        let mut run = None;
-        let written = files::write_with(path, |w| {
-            let result = self.record(w, software, deadline, each_frame);
-            let failed = result.is_err();
-            run = Some(result);
-            match failed {
-                true => Err(std::io::Error::other("the run stopped")),
-                false => Ok(()),
-            }
-        });
-        match (run, written) {
-            (Some(Err(e)), _) => Err(e),
-            (_, Err(e)) => Err(e.into()),
-            (Some(Ok(summary)), Ok(())) => Ok(summary),
-            (None, Ok(())) => unreachable!("write_with succeeds only after calling fill"),
-        }
+        let mut summary = None;
+        files::write_fallible(path, |w| {
+            summary = Some(self.record(w, software, deadline, each_frame)?);
+            Ok::<(), Error>(())
+        })?;
+        Ok(summary.expect("set by a fill that succeeded"))
     }
 
     /// Runs the scene and writes its recording to `out` (template, frames, statistics, and
