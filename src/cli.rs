@@ -461,6 +461,16 @@ pub enum ColourBy {
     Error,
 }
 
+impl From<ColourBy> for render::recording::ColourBy {
+    fn from(by: ColourBy) -> Self {
+        match by {
+            ColourBy::Stretch => Self::Stretch,
+            ColourBy::Penetration => Self::Penetration,
+            ColourBy::Error => Self::Error,
+        }
+    }
+}
+
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     /// Recording to draw (.mcap from `simulate` or `demo`).

@@ -6,7 +6,6 @@ mod cli;
 mod commands;
 mod inputs;
 mod output;
-mod pictures;
 mod prediction;
 mod report;
 mod run;

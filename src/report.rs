@@ -18,7 +18,7 @@ use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, tables};
 use surrogate::predict::{BodySequence, Predictor, Settings};
 
 use crate::output::write_atomic;
-use crate::pictures::{comparison_sheet, write_view};
+use render::recording::{comparison_sheet, write_view};
 use crate::prediction::{Recorded, record_prediction};
 
 /// Prints the short table of `evaluate`.

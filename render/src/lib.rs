@@ -2,15 +2,17 @@
 //! Lambert shading, outlines, optional per-vertex colouring with a colour bar), contact sheets,
 //! PNG and animated GIF encoding, and a self-contained WebGL viewer page.
 //!
-//! Plain data in (vertex positions and triangles as `f32` triples), pictures out; the crate
-//! knows nothing about recordings or bodies, so the command line and the surrogate's reports
-//! both use it.
+//! The drawing core takes plain data (vertex positions and triangles as `f32` triples) and
+//! gives pictures. [`recording`] draws the engine's recordings with their bodies on top of it
+//! (frames, sheets, GIFs, the viewer page and the reports' comparisons), for the command line
+//! and the surrogate's reports.
 #![warn(missing_docs)]
 
 mod camera;
 mod chart;
 mod colour;
 mod raster;
+pub mod recording;
 mod sheet;
 mod texels;
 pub mod viewer;
@@ -44,4 +46,10 @@ pub enum Error {
     /// Inconsistent input data.
     #[error("{0}")]
     Input(String),
+    /// A recording could not be read, or a body measured.
+    #[error(transparent)]
+    Engine(#[from] sim::Error),
+    /// An output could not be written whole.
+    #[error(transparent)]
+    Files(#[from] files::Error),
 }

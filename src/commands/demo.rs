@@ -16,7 +16,9 @@ use surrogate::train::TrainedModel;
 
 use crate::cli::DemoArgs;
 use crate::output::write_json;
-use crate::pictures::{RenderJob, comparison_gif, comparison_sheet, render_recording, write_view};
+use render::recording::{
+    RenderJob, comparison_gif, comparison_sheet, render_recording, write_view,
+};
 use crate::prediction::{SceneRequest, model_dir, predict_scene};
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
 
@@ -65,7 +67,15 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         gif: Some((2, 320)),
     };
     let pictures = out.join("pictures");
-    let rendered = render_recording(&sequence, &prepared.model, true, &job, &pictures)?;
+    let mut progress = super::render::gif_progress();
+    let rendered = render_recording(
+        &sequence,
+        &prepared.model,
+        true,
+        &job,
+        &pictures,
+        &mut progress,
+    )?;
     let mut summary = summary_json(&s, &sequence);
     let mut recordings = vec![sequence.clone()];
     if let Some((name, trained)) = &surrogate {

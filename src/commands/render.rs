@@ -1,15 +1,16 @@
 //! `dit-garment render` (PNG pictures, contact sheet, GIF) and `dit-garment view` (the HTML
-//! viewer) of recordings, over the shared picture code (`crate::pictures`).
+//! viewer) of recordings, over `render::recording`.
 
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use render::recording::{RenderJob, render_recording, write_view};
 use render::{ColourScale, View};
 use serde_json::json;
 
 use crate::cli::{RenderArgs, ViewArgs};
 use crate::output::write_json;
-use crate::pictures::{RenderJob, render_recording, write_view};
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let views = args
@@ -60,11 +61,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         views: &views,
         size: args.size,
         ssaa: args.ssaa,
-        colour_by: args.color_by.map(|by| (by, args.against.as_deref(), range)),
+        colour_by: args
+            .color_by
+            .map(|by| (by.into(), args.against.as_deref(), range)),
         gif: args.gif.then_some((args.gif_every, args.gif_size)),
     };
-    let r = render_recording(&args.recording, &model, !args.no_body, &job, &args.out)
-        .with_context(|| format!("rendering {}", args.recording.display()))?;
+    let mut progress = gif_progress();
+    let r = render_recording(
+        &args.recording,
+        &model,
+        !args.no_body,
+        &job,
+        &args.out,
+        &mut progress,
+    )
+    .with_context(|| format!("rendering {}", args.recording.display()))?;
     println!(
         "render: {} pictures of {} in {:.2} s ({:.0} ms each, {} garment pixels in the first); contact sheet {}{}",
         r.pictures,
@@ -113,4 +124,24 @@ pub fn view(args: &ViewArgs) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// A progress bar for a GIF being drawn, shown from its first frame and cleared after its
+/// last.
+pub fn gif_progress() -> impl FnMut(usize, usize) {
+    let mut bar: Option<ProgressBar> = None;
+    move |done, total| {
+        let bar = bar.get_or_insert_with(|| {
+            let style = ProgressStyle::with_template(
+                "gif [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
+            )
+            .expect("a valid template")
+            .progress_chars("=> ");
+            ProgressBar::new(total as u64).with_style(style)
+        });
+        bar.set_position(done as u64);
+        if done == total {
+            bar.finish_and_clear();
+        }
+    }
 }

@@ -14,7 +14,7 @@ use surrogate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
 use crate::cli::UvArgs;
 use crate::inputs;
 use crate::output::write_json;
-use crate::pictures::write_png;
+use render::recording::save_png;
 
 /// Pixels per side of every picture (texels are drawn as blocks).
 const PICTURE_PIXELS: u32 = 384;
@@ -161,10 +161,10 @@ pub fn run(args: &UvArgs) -> Result<()> {
             Some(n) => n.to_string(),
             None => format!("target_{}.png", i - names.len()),
         };
-        write_png(&args.out.join(name), tile)?;
+        save_png(&args.out.join(name), tile)?;
     }
     let sheet = args.out.join("contact_sheet.png");
-    write_png(&sheet, &contact_sheet(&tiles, 3))?;
+    save_png(&sheet, &contact_sheet(&tiles, 3))?;
     summary["contact_sheet"] = json!(sheet);
     println!(
         "uv: '{}' at {r} x {r}: {} vertices, {} UV corners, {} charts, coverage {:.2}, texel {:.2} cm{}",

@@ -1,19 +1,45 @@
-//! Pictures of recordings as the commands share them: PNG frames, contact sheets and GIFs
-//! (`render`, `demo`) and the self-contained HTML viewer (`view`, `demo`).
+//! Pictures of the engine's recordings (sim's MCAP) with their bodies: PNG frames, contact
+//! sheets and GIFs, coloured by stretch, depth in the body or error against a reference; the
+//! self-contained viewer page; and the simulation-against-prediction sheets and GIFs of the
+//! surrogate's reports. Every file is written atomically.
 
+use std::fs::File;
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use motions::BodyModel;
-use render::viewer::{BODY_COLOUR, GARMENT_COLOURS, Track, ViewerSequence};
-use render::{Bounds, Camera, ColourScale, Layer, P3, Renderer, RgbImage, View};
 use sim::obstacles::AnimatedMesh;
 use sim::recording::Recording;
 
-use crate::cli::ColourBy;
-use crate::output::write_atomic;
+use crate::viewer::{BODY_COLOUR, GARMENT_COLOURS, Track, ViewerSequence};
+use crate::{Bounds, Camera, ColourScale, Error, Layer, P3, Renderer, RgbImage, View};
+
+type Result<T> = std::result::Result<T, Error>;
+
+/// What the garment's vertices are coloured by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColourBy {
+    /// Largest stretch of the vertex's edges against the template (length / rest length).
+    Stretch,
+    /// Depth inside the body, mm.
+    Penetration,
+    /// Distance to the same vertex in a reference recording, cm.
+    Error,
+}
+
+/// An error about the input, as text.
+fn input(message: impl Into<String>) -> Error {
+    Error::Input(message.into())
+}
+
+/// Writes `path` through `fill` atomically, its folder made if missing.
+fn save(path: &Path, fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    files::write_fallible(path, fill)
+}
 
 /// Reach of the penetration query, m: deeper points are found by the unbounded query.
 const PENETRATION_REACH_M: f64 = 0.05;
@@ -41,7 +67,10 @@ impl<'a> Sequence<'a> {
     fn open(path: &'a Path, model: &'a BodyModel, with_body: bool) -> Result<Self> {
         let recording = Recording::read(path)?;
         if recording.garment.is_empty() {
-            bail!("{}: the recording has no garment frames", path.display());
+            return Err(input(format!(
+                "{}: the recording has no garment frames",
+                path.display()
+            )));
         }
         let body_faces = if with_body {
             recording.body_at(model, 0, path)?.faces
@@ -106,21 +135,25 @@ impl Colouring {
             }
             ColourBy::Penetration => {
                 if !seq.with_body {
-                    bail!("--color-by penetration needs the body (drop --no-body)");
+                    return Err(input(
+                        "colouring by penetration needs the body (drop --no-body)",
+                    ));
                 }
                 Colouring::Penetration
             }
             ColourBy::Error => {
-                let path = against.context("--color-by error needs --against REFERENCE.mcap")?;
+                let path = against.ok_or_else(|| {
+                    input("colouring by error needs a reference (--against REFERENCE.mcap)")
+                })?;
                 let reference = Recording::read(path)?;
                 if reference.template.positions.len() != seq.recording.template.positions.len() {
-                    bail!(
+                    return Err(input(format!(
                         "{} has {} garment vertices, {} has {}: --against needs the same template",
                         path.display(),
                         reference.template.positions.len(),
                         seq.path.display(),
                         seq.recording.template.positions.len()
-                    );
+                    )));
                 }
                 Colouring::Error {
                     reference: Box::new(reference),
@@ -174,7 +207,7 @@ impl Colouring {
                 let r = reference
                     .garment
                     .get(k)
-                    .with_context(|| format!("the --against recording has no frame {k}"))?;
+                    .ok_or_else(|| input(format!("the --against recording has no frame {k}")))?;
                 g.iter()
                     .zip(r)
                     .map(|(&p, &q)| render_distance(p, q) * 100.0)
@@ -236,43 +269,58 @@ fn picture(
     }
     let mut image = renderer.render(&camera, &layers).clone();
     if let Some((_, scale, label)) = colours {
-        render::draw_colour_bar(&mut image, &scale, label);
+        crate::draw_colour_bar(&mut image, &scale, label);
     }
     image
 }
 
 /// Writes a picture as PNG, atomically.
-pub fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
-    write_atomic(path, |w| Ok(render::write_png(w, image)?))
+pub fn save_png(path: &Path, image: &RgbImage) -> Result<()> {
+    save(path, |w| crate::write_png(w, image))
 }
 
 /// What `render` wrote.
 pub struct Rendered {
+    /// The PNG pictures, one per frame and view.
     pub images: Vec<PathBuf>,
+    /// Pixels the garment covers in the first picture.
     pub pixels_garment: usize,
+    /// The contact sheet of every picture.
     pub sheet: PathBuf,
+    /// The GIF, if one was asked for.
     pub gif: Option<PathBuf>,
+    /// Pictures drawn.
     pub pictures: usize,
+    /// Wall time, s.
     pub wall_s: f64,
 }
 
 /// Options of one `render` run.
 pub struct RenderJob<'a> {
+    /// Recording frames to draw (empty: six spread over the sequence).
     pub frames: &'a [usize],
+    /// Views of each frame.
     pub views: &'a [View],
+    /// Picture size, pixels per side.
     pub size: u32,
+    /// Supersampling per side.
     pub ssaa: u32,
+    /// Colouring: by what, the reference recording of `Error`, and the scale (default per
+    /// kind).
     pub colour_by: Option<(ColourBy, Option<&'a Path>, Option<ColourScale>)>,
+    /// A GIF of the whole sequence: every K-th frame, at this size.
     pub gif: Option<(usize, u32)>,
 }
 
-/// Draws the chosen frames and views into `out`, with a contact sheet and optionally a GIF.
+/// Draws the chosen frames and views into `out`, with a contact sheet and optionally a GIF
+/// (`gif_progress` told the frames done and the total as it is drawn).
 pub fn render_recording(
     path: &Path,
     model: &BodyModel,
     with_body: bool,
     job: &RenderJob,
     out: &Path,
+    gif_progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Rendered> {
     let started = Instant::now();
     let seq = Sequence::open(path, model, with_body)?;
@@ -286,10 +334,10 @@ pub fn render_recording(
     let mut seen = std::collections::HashSet::new();
     frames.retain(|k| seen.insert(*k));
     if let Some(&k) = frames.iter().find(|&&k| k >= n) {
-        bail!(
+        return Err(input(format!(
             "frame {k} is past the end of {} ({n} frames)",
             path.display()
-        );
+        )));
     }
     let colouring = match job.colour_by {
         Some((by, against, _)) => Some(Colouring::new(by, &seq, against)?),
@@ -305,7 +353,7 @@ pub fn render_recording(
         .map(|&k| seq.meshes(k))
         .collect::<Result<Vec<_>>>()?;
     let size = framing_size(&meshes.iter().collect::<Vec<_>>())
-        .with_context(|| format!("{}: no finite vertex to frame", path.display()))?;
+        .ok_or_else(|| input(format!("{}: no finite vertex to frame", path.display())))?;
     let mut renderer = Renderer::new(job.size, job.size, job.ssaa);
     let mut images = Vec::new();
     let mut tiles = Vec::new();
@@ -323,7 +371,7 @@ pub fn render_recording(
             let image = picture(&mut renderer, view, &seq, frame, &size, colours);
             pixels_garment.get_or_insert(renderer.coverage(0));
             let file = out.join(format!("frame_{k:05}_{}.png", view.name()));
-            write_png(&file, &image)?;
+            save_png(&file, &image)?;
             images.push(file);
             tiles.push((image, format!("frame {k} {}", view.name())));
         }
@@ -333,14 +381,15 @@ pub fn render_recording(
     } else {
         (tiles.len() as f64).sqrt().ceil() as usize
     };
-    let sheet_image = render::contact_sheet(&tiles, columns);
+    let sheet_image = crate::contact_sheet(&tiles, columns);
     let sheet = out.join("contact_sheet.png");
-    write_png(&sheet, &sheet_image)?;
+    save_png(&sheet, &sheet_image)?;
     let gif = match job.gif {
         Some((every, gif_size)) => {
             let file = out.join("sequence.gif");
             let view = job.views.first().copied().unwrap_or(View::ThreeQuarter);
-            write_gif(&seq, &file, view, every.max(1), gif_size, job.ssaa)?;
+            let shape = (every.max(1), gif_size, job.ssaa);
+            write_gif(&seq, &file, view, shape, gif_progress)?;
             Some(file)
         }
         None => None,
@@ -355,14 +404,14 @@ pub fn render_recording(
     })
 }
 
-/// The whole sequence (every `every`-th frame) as a looping GIF at the recording's speed.
+/// The whole sequence (every `every`-th frame) as a looping GIF at the recording's speed;
+/// `shape` is (every, size, supersampling).
 fn write_gif(
     seq: &Sequence,
     file: &Path,
     view: View,
-    every: usize,
-    size: u32,
-    ssaa: u32,
+    (every, size, ssaa): (usize, u32, u32),
+    progress: &mut dyn FnMut(usize, usize),
 ) -> Result<()> {
     let keep: Vec<usize> = (0..seq.frames()).step_by(every).collect();
     // Framing from a few frames spread over the sequence: one size for the whole loop.
@@ -370,16 +419,12 @@ fn write_gif(
         .map(|i| seq.meshes(keep[i * (keep.len() - 1) / 7]))
         .collect::<Result<Vec<_>>>()?;
     let frame_size = framing_size(&probes.iter().collect::<Vec<_>>())
-        .with_context(|| format!("{}: no finite vertex to frame", seq.path.display()))?;
+        .ok_or_else(|| input(format!("{}: no finite vertex to frame", seq.path.display())))?;
     let fps = seq.recording.meta.as_ref().map_or(30.0, |m| m.fps) as f32 / every as f32;
-    let bar = ProgressBar::new(keep.len() as u64).with_style(
-        ProgressStyle::with_template("gif [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})")?
-            .progress_chars("=> "),
-    );
     let mut renderer = Renderer::new(size, size, ssaa);
-    write_atomic(file, |w| {
-        let mut gif = render::GifWriter::new(w, size, size, fps)?;
-        for &k in &keep {
+    save(file, |w| {
+        let mut gif = crate::GifWriter::new(w, size, size, fps)?;
+        for (done, &k) in keep.iter().enumerate() {
             let frame = seq.meshes(k)?;
             gif.push(&picture(
                 &mut renderer,
@@ -389,13 +434,11 @@ fn write_gif(
                 &frame_size,
                 None,
             ))?;
-            bar.inc(1);
+            progress(done + 1, keep.len());
         }
         gif.finish()?;
         Ok(())
-    })?;
-    bar.finish_and_clear();
-    Ok(())
+    })
 }
 
 /// The viewer's rows of metadata for a recording.
@@ -474,7 +517,7 @@ pub fn write_view(
             },
         });
     }
-    write_atomic(out, |w| Ok(render::viewer::write_viewer(w, &sequences)?))
+    save(out, |w| crate::viewer::write_viewer(w, &sequences))
 }
 
 /// A sheet of three rows over `frames`: the simulation, the prediction, and the prediction
@@ -491,10 +534,10 @@ pub fn comparison_sheet(
     let b = Sequence::open(predicted, model, true)?;
     let n = a.frames().min(b.frames());
     if let Some(&k) = frames.iter().find(|&&k| k >= n) {
-        bail!(
+        return Err(input(format!(
             "frame {k} is past the end of {} ({n} frames)",
             predicted.display()
-        );
+        )));
     }
     let colouring = Colouring::new(ColourBy::Error, &b, Some(truth))?;
     let scale = colouring.default_scale();
@@ -507,7 +550,7 @@ pub fn comparison_sheet(
         .map(|&k| b.meshes(k))
         .collect::<Result<Vec<_>>>()?;
     let all: Vec<&FrameMeshes> = meshes_a.iter().chain(&meshes_b).collect();
-    let bounds = framing_size(&all).context("no finite vertex to frame")?;
+    let bounds = framing_size(&all).ok_or_else(|| input("no finite vertex to frame"))?;
     let mut renderer = Renderer::new(size, size, 2);
     let view = View::ThreeQuarter;
     let mut tiles = Vec::new();
@@ -525,7 +568,7 @@ pub fn comparison_sheet(
         let image = picture(&mut renderer, view, &b, m, &bounds, colours);
         tiles.push((image, format!("error {k}")));
     }
-    write_png(out, &render::contact_sheet(&tiles, frames.len()))
+    save_png(out, &crate::contact_sheet(&tiles, frames.len()))
 }
 
 /// The simulation, the prediction and its error against the simulation side by side, every
@@ -547,7 +590,7 @@ pub fn comparison_gif(
         .flat_map(|k| [a.meshes(k), b.meshes(k)])
         .collect::<Result<Vec<_>>>()?;
     let bounds = framing_size(&probes.iter().collect::<Vec<_>>())
-        .with_context(|| format!("{}: no finite vertex to frame", predicted.display()))?;
+        .ok_or_else(|| input(format!("{}: no finite vertex to frame", predicted.display())))?;
     let colouring = Colouring::new(ColourBy::Error, &b, Some(truth))?;
     let scale = colouring.default_scale();
     let fps = a.recording.meta.as_ref().map_or(30.0, |m| m.fps) as f32 / every as f32;
@@ -572,11 +615,11 @@ pub fn comparison_gif(
             ),
         ]
         .map(|(image, label)| (image, format!("{label} {k}")));
-        Ok(render::contact_sheet(&tiles, 3))
+        Ok(crate::contact_sheet(&tiles, 3))
     };
     let first = sheet(keep[0])?;
-    write_atomic(out, |w| {
-        let mut gif = render::GifWriter::new(w, first.width(), first.height(), fps)?;
+    save(out, |w| {
+        let mut gif = crate::GifWriter::new(w, first.width(), first.height(), fps)?;
         gif.push(&first)?;
         for &k in &keep[1..] {
             gif.push(&sheet(k)?)?;
