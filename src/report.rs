@@ -8,7 +8,6 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use base64::Engine;
-use indicatif::ProgressBar;
 use motions::BodyModel;
 use serde_json::{Value, json};
 use sim::recording::{Recording, TemplateArrays};
@@ -19,7 +18,7 @@ use surrogate::predict::{BodySequence, Predictor, Settings};
 
 use crate::output::write_atomic;
 use render::recording::{comparison_sheet, write_view};
-use crate::prediction::{Recorded, record_prediction};
+use surrogate::predict::{Recorded, record_prediction};
 
 /// Prints the short table of `evaluate`.
 pub fn print_table(splits: &SplitRows) {
@@ -104,7 +103,7 @@ fn predict_recording(
         faces: p.body.faces(),
         body_vertices: false,
         obj: None,
-        bar: &ProgressBar::hidden(),
+        tick: &mut || {},
     };
     record_prediction(out, recorded)?;
     Ok(())

@@ -14,11 +14,10 @@ use serde_json::json;
 use sim::SceneConfig;
 use sim::recording::Recording;
 use sim::run::Prepared;
-use sim::scene::{FrameOutput, RunSummary};
+use sim::scene::RunSummary;
 
 use crate::cli::SceneArgs;
 use crate::inputs;
-use crate::output::write_atomic;
 
 /// The most compute threads (or synthesis jobs) a run may ask for.
 pub const MAX_THREADS: usize = 1024;
@@ -155,23 +154,20 @@ pub struct RecordOptions<'a> {
 /// `options` ask.
 pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSummary> {
     let software = format!("dit-garment {}", env!("CARGO_PKG_VERSION"));
-    let bar = ProgressBar::new(p.scene.num_frames() as u64).with_style(
-        ProgressStyle::with_template(
-            "simulating [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
-        )?
-        .progress_chars("=> "),
-    );
-    if options.quiet {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
+    let bar = frames_bar("simulating", p.scene.num_frames(), options.quiet)?;
     let summary = p.record_file(out, &software, options.deadline, |frame| {
         if let Some((dir, every)) = options.obj
             && frame.index % every.max(1) == 0
         {
-            write_frame_objs(dir, p, frame).map_err(|e| sim::Error::Recording {
-                path: dir.display().to_string(),
-                message: format!("{e:#}"),
-            })?;
+            let body = &frame.body.vertices;
+            sim::run::write_objs(
+                dir,
+                frame.index,
+                &p.garment,
+                frame.garment,
+                body,
+                p.model.faces(),
+            )?;
         }
         bar.inc(1);
         Ok(())
@@ -180,41 +176,15 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
     Ok(summary)
 }
 
-fn write_frame_objs(dir: &Path, p: &Prepared, frame: &FrameOutput) -> Result<()> {
-    write_objs(
-        dir,
-        frame.index,
-        &p.garment,
-        frame.garment,
-        &frame.body.vertices,
-        p.model.faces(),
-    )
-}
-
-/// Frame `k`'s garment (the template's mesh at `cloth`) and body as `garment_<k>.obj` and
-/// `body_<k>.obj` in `dir`.
-pub fn write_objs(
-    dir: &Path,
-    k: usize,
-    garment: &garments::Garment,
-    cloth: &[[f64; 3]],
-    body: &[[f64; 3]],
-    faces: &[[u32; 3]],
-) -> Result<()> {
-    write_atomic(&dir.join(format!("garment_{k:04}.obj")), |w| {
-        garments::write_obj(w, garment, Some(cloth))?;
-        Ok(())
-    })?;
-    write_atomic(&dir.join(format!("body_{k:04}.obj")), |w| {
-        writeln!(w, "# body frame {k}")?;
-        for v in body {
-            writeln!(w, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
-        }
-        for f in faces {
-            writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
-        }
-        Ok(())
-    })
+/// A progress bar over `frames` frames, labelled `what`; hidden when `quiet`.
+pub fn frames_bar(what: &str, frames: usize, quiet: bool) -> Result<ProgressBar> {
+    let template = format!("{what} [{{bar:30}}] {{pos}}/{{len}} frames ({{per_sec}}, eta {{eta}})");
+    let bar = ProgressBar::new(frames as u64)
+        .with_style(ProgressStyle::with_template(&template)?.progress_chars("=> "));
+    if quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    Ok(bar)
 }
 
 /// The machine-readable summary (keys checked by scripts).

@@ -86,7 +86,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.txt");
         let failed = write_fallible(&path, |w| {
-            w.write_all(b"half").map_err(|e| Fill::Write(e.to_string()))?;
+            w.write_all(b"half")
+                .map_err(|e| Fill::Write(e.to_string()))?;
             Err(Fill::Stopped(7))
         });
         assert_eq!(failed, Err(Fill::Stopped(7)));
@@ -94,8 +95,11 @@ mod tests {
         let missing = dir.path().join("no/such/folder/out.txt");
         let e = write_fallible(&missing, |_| Ok::<(), Fill>(())).unwrap_err();
         assert!(matches!(e, Fill::Write(_)), "{e:?}");
-        write_fallible(&path, |w| w.write_all(b"whole").map_err(|e| Fill::Write(e.to_string())))
-            .unwrap();
+        write_fallible(&path, |w| {
+            w.write_all(b"whole")
+                .map_err(|e| Fill::Write(e.to_string()))
+        })
+        .unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "whole");
     }
 }

@@ -589,8 +589,12 @@ pub fn comparison_gif(
         .map(|i| keep[i * (keep.len() - 1) / 7])
         .flat_map(|k| [a.meshes(k), b.meshes(k)])
         .collect::<Result<Vec<_>>>()?;
-    let bounds = framing_size(&probes.iter().collect::<Vec<_>>())
-        .ok_or_else(|| input(format!("{}: no finite vertex to frame", predicted.display())))?;
+    let bounds = framing_size(&probes.iter().collect::<Vec<_>>()).ok_or_else(|| {
+        input(format!(
+            "{}: no finite vertex to frame",
+            predicted.display()
+        ))
+    })?;
     let colouring = Colouring::new(ColourBy::Error, &b, Some(truth))?;
     let scale = colouring.default_scale();
     let fps = a.recording.meta.as_ref().map_or(30.0, |m| m.fps) as f32 / every as f32;

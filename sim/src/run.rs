@@ -123,6 +123,36 @@ impl Prepared {
     }
 }
 
+/// Frame `k`'s garment (`garment`'s mesh at `cloth`) and body (`body` over `faces`) as
+/// `garment_<k>.obj` and `body_<k>.obj` in `dir` (made if missing), each written atomically.
+pub fn write_objs(
+    dir: &Path,
+    k: usize,
+    garment: &garments::Garment,
+    cloth: &[[f64; 3]],
+    body: &[[f64; 3]],
+    faces: &[[u32; 3]],
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| files::Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    files::write_with(&dir.join(format!("garment_{k:04}.obj")), |w| {
+        garments::write_obj(w, garment, Some(cloth))
+    })?;
+    files::write_with(&dir.join(format!("body_{k:04}.obj")), |w| {
+        writeln!(w, "# body frame {k}")?;
+        for v in body {
+            writeln!(w, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
+        }
+        for f in faces {
+            writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

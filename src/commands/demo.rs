@@ -19,7 +19,10 @@ use crate::output::write_json;
 use render::recording::{
     RenderJob, comparison_gif, comparison_sheet, render_recording, write_view,
 };
-use crate::prediction::{SceneRequest, model_dir, predict_scene};
+use surrogate::predict::{SceneRequest, predict_scene};
+
+use crate::prediction::model_dir;
+use crate::run::frames_bar;
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
 
 /// The demo's garment: a library design the shipped model was not trained on (held out in
@@ -128,10 +131,11 @@ fn predict_and_compare(
         out: &path,
         obj_dir: None,
         body_vertices: false,
-        quiet: false,
         software: &software,
     };
-    let p = predict_scene(prepared, &request)?;
+    let bar = frames_bar("predicting", prepared.scene.num_frames(), false)?;
+    let p = predict_scene(prepared, &request, &mut || bar.inc(1))?;
+    bar.finish_and_clear();
     let truth = out.join("sequence.mcap");
     let scores = crate::scoring::score(&truth, &path, &prepared.model, 0)?;
     let n = p.frames;

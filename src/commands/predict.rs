@@ -12,7 +12,10 @@ use surrogate::train::TrainedModel;
 
 use crate::cli::{ModelArgs, PredictArgs, SceneArgs};
 use crate::output::write_json;
-use crate::prediction::{PredictionStats, SceneRequest, model_dir, predict_scene};
+use surrogate::predict::{PredictionStats, SceneRequest, predict_scene};
+
+use crate::prediction::model_dir;
+use crate::run::frames_bar;
 use crate::run::{prepare, resolve_config, set_threads};
 
 pub fn run(args: &PredictArgs) -> Result<()> {
@@ -86,10 +89,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         out: &args.out,
         obj_dir: args.obj_dir.as_deref(),
         body_vertices: args.body_vertices,
-        quiet: args.quiet,
         software: &software,
     };
-    let p = predict_scene(&prepared, &request)?;
+    let bar = frames_bar("predicting", prepared.scene.num_frames(), args.quiet)?;
+    let p = predict_scene(&prepared, &request, &mut || bar.inc(1))?;
+    bar.finish_and_clear();
     let (garment, scene) = (&prepared.garment, &prepared.scene);
     let PredictionStats {
         finite,

@@ -92,9 +92,10 @@ impl Evaluation<'_> {
     /// Scores one sequence with every method; its recording must match the manifest's
     /// checksum.
     pub fn sequence(&self, record: &ManifestRecord) -> Result<SequenceResult> {
-        let file = record.file.as_deref().ok_or_else(|| {
-            Error::Invalid(format!("sequence {} has no recording", record.id))
-        })?;
+        let file = record
+            .file
+            .as_deref()
+            .ok_or_else(|| Error::Invalid(format!("sequence {} has no recording", record.id)))?;
         let path = self.data.join(file);
         if let Some(expected) = &record.sha256 {
             let (sha, _) = files::sha256_file(&path)?;

@@ -8,10 +8,14 @@
 //! coherent; [`Noise::PerFrame`] draws it per frame. Same inputs and settings, same bits.
 
 mod guidance;
+mod record;
 
 pub use guidance::{
     CONTACT_BAND_M, Clearance, ClearanceCache, Guidance, REUSE_WITHIN_M, clearances,
     penalty_gradient, penetration, push_out,
+};
+pub use record::{
+    PredictionStats, Recorded, ScenePrediction, SceneRequest, predict_scene, record_prediction,
 };
 
 use std::time::Instant;
