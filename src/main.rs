@@ -7,7 +7,6 @@ mod commands;
 mod inputs;
 mod output;
 mod prediction;
-mod report;
 mod run;
 mod scoring;
 

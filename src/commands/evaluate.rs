@@ -1,6 +1,7 @@
 //! `dit-garment evaluate`: a model scored over a dataset's held-out splits beside the
 //! baselines, per sequence in parallel, each sequence's result cached in the report folder
-//! (a rerun with the same settings reuses it); JSON and the report (`crate::report`).
+//! (a rerun with the same settings reuses it); JSON and the report
+//! (`surrogate::evaluate::report`).
 
 use std::time::Instant;
 
@@ -11,7 +12,7 @@ use serde_json::{Value, json};
 use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
-use surrogate::evaluate::tables::{SequenceResult, aggregate, paper_numbers};
+use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, paper_numbers};
 use surrogate::evaluate::{Evaluation, UNITS, select};
 use surrogate::predict::{Guidance, Predictor, Settings};
 use surrogate::train::TrainedModel;
@@ -19,7 +20,7 @@ use surrogate::train::TrainedModel;
 use crate::cli::EvaluateArgs;
 use crate::output::write_json;
 use crate::prediction::model_dir;
-use crate::report::{self, Pictures};
+use surrogate::evaluate::report::{self, Pictures};
 use crate::run::set_threads;
 
 pub fn run(args: &EvaluateArgs) -> Result<()> {
@@ -193,6 +194,30 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         started.elapsed().as_secs_f64(),
         reused
     );
-    report::print_table(&splits);
+    print_table(&splits);
     Ok(())
 }
+
+/// Prints the short table of `evaluate`.
+pub fn print_table(splits: &SplitRows) {
+    println!(
+        "{:<14} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}",
+        "split", "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
+    );
+    for (s, methods) in splits {
+        for (m, r) in methods {
+            println!(
+                "{:<14} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}",
+                s,
+                m.name(),
+                r.scores.E_v,
+                r.scores.E_c,
+                r.inside_percent,
+                r.stretch_p99,
+                r.jitter,
+                r.fps
+            );
+        }
+    }
+}
+

@@ -119,4 +119,7 @@ pub enum Error {
     /// A body model or motion error.
     #[error(transparent)]
     Motion(#[from] motions::Error),
+    /// A picture could not be drawn or written.
+    #[error(transparent)]
+    Render(#[from] render::Error),
 }

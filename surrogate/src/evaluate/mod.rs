@@ -10,6 +10,7 @@
 
 pub mod baselines;
 mod protocol;
+pub mod report;
 pub mod tables;
 
 pub use protocol::{Evaluation, select};

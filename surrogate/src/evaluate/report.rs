@@ -3,51 +3,29 @@
 //! sequence of each split (simulated | predicted | error sheets, a side-by-side viewer page).
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
 use base64::Engine;
 use motions::BodyModel;
+use render::recording::{comparison_sheet, write_view};
 use serde_json::{Value, json};
 use sim::recording::{Recording, TemplateArrays};
-use surrogate::data::Sequence;
-use surrogate::evaluate::Method;
-use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, tables};
-use surrogate::predict::{BodySequence, Predictor, Settings};
 
-use crate::output::write_atomic;
-use render::recording::{comparison_sheet, write_view};
-use surrogate::predict::{Recorded, record_prediction};
-
-/// Prints the short table of `evaluate`.
-pub fn print_table(splits: &SplitRows) {
-    println!(
-        "{:<14} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}",
-        "split", "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
-    );
-    for (s, methods) in splits {
-        for (m, r) in methods {
-            println!(
-                "{:<14} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}",
-                s,
-                m.name(),
-                r.scores.E_v,
-                r.scores.E_c,
-                r.inside_percent,
-                r.stretch_p99,
-                r.jitter,
-                r.fps
-            );
-        }
-    }
-}
+use super::Method;
+use super::tables::{SequenceResult, aggregate, tables};
+use crate::data::Sequence;
+use crate::error::{Result, file_error};
+use crate::predict::{BodySequence, Predictor, Recorded, Settings, record_prediction};
 
 /// What the pictures need: the dataset, the body model and the model to predict with.
 pub struct Pictures<'a> {
+    /// The dataset folder.
     pub data: &'a Path,
+    /// The body model.
     pub body: &'a BodyModel,
+    /// The model (no pictures without one).
     pub predictor: Option<&'a Predictor<'a>>,
+    /// The sampler's settings.
     pub settings: Settings,
 }
 
@@ -109,9 +87,10 @@ fn predict_recording(
     Ok(())
 }
 
-/// Writes `DIR/README.md`, `DIR/index.html` and the pictures.
+/// Writes `dir/README.md`, `dir/index.html` and the pictures; `output` is the evaluation's
+/// JSON (its `settings` and `model` head the report).
 pub fn write(dir: &Path, output: &Value, results: &[SequenceResult], p: &Pictures) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    std::fs::create_dir_all(dir).map_err(|e| file_error(dir, e))?;
     let (splits, simulation) = aggregate(results);
     let mut md = String::from("# Evaluation report\n\n");
     let s = &output["settings"];
@@ -141,10 +120,10 @@ pub fn write(dir: &Path, output: &Value, results: &[SequenceResult], p: &Picture
             for (which, r) in picked(results, split) {
                 let folder = format!("pictures/{split}_{which}");
                 let out = dir.join(&folder);
-                std::fs::create_dir_all(&out)?;
+                std::fs::create_dir_all(&out).map_err(|e| file_error(&out, e))?;
                 let predicted = out.join("predicted.mcap");
                 predict_recording(p, predictor, r, &predicted)
-                    .with_context(|| format!("predicting {}", r.id))?;
+                    .map_err(|e| file_error(&predicted, format!("predicting {}: {e}", r.id)))?;
                 let truth = p.data.join(&r.file);
                 let n = Recording::read(&truth)?.garment.len();
                 let first = n / 3;
@@ -167,7 +146,7 @@ pub fn write(dir: &Path, output: &Value, results: &[SequenceResult], p: &Picture
                     md,
                     "### {title}\n\nRows: simulated, predicted, error (cm). [Side by side viewer]({folder}/view.html)\n\n![{title}]({folder}/sheet.png)\n"
                 );
-                let png = std::fs::read(&sheet)?;
+                let png = std::fs::read(&sheet).map_err(|e| file_error(&sheet, e))?;
                 let _ = writeln!(
                     html_pictures,
                     "<h3>{title}</h3><p>Rows: simulated, predicted, error. <a href=\"{folder}/view.html\">Side by side viewer</a></p><img src=\"data:image/png;base64,{}\" style=\"max-width:100%\">",
@@ -180,15 +159,13 @@ pub fn write(dir: &Path, output: &Value, results: &[SequenceResult], p: &Picture
         md,
         "Per-sequence rows are in the JSON (`sequences`) and in `sequences/<id>.json`."
     );
-    write_atomic(&dir.join("README.md"), |w| Ok(w.write_all(md.as_bytes())?))?;
+    files::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     let html = format!(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>Evaluation report</title><style>body{{font-family:sans-serif;max-width:1200px;margin:auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}</style></head><body>{}{}</body></html>\n",
         markdown_tables_to_html(&md),
         html_pictures
     );
-    write_atomic(&dir.join("index.html"), |w| {
-        Ok(w.write_all(html.as_bytes())?)
-    })?;
+    files::write_atomic(&dir.join("index.html"), html.as_bytes())?;
     Ok(())
 }
 
