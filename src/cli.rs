@@ -188,44 +188,17 @@ pub struct SceneArgs {
     /// values.
     #[arg(long, conflicts_with = "config_from")]
     pub config: Option<PathBuf>,
-    /// Start from the configuration a recording carries in its metadata (to simulate it
-    /// again); flags override its values.
-    #[arg(long)]
-    pub config_from: Option<PathBuf>,
     /// Print the resolved configuration as TOML and exit (nothing is simulated or written).
     #[arg(long)]
     pub print_config: bool,
-    /// Garment: a library design (see `garments list`; its template is made once and cached),
-    /// the built-in skirt (`skirt`, `default`), or a template OBJ with UVs aligned to the
-    /// default body in its canonical A-pose. Default: `default`.
-    #[arg(long)]
-    pub garment: Option<String>,
-    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
-    /// AMASS .npz file. Default: `walk`.
-    #[arg(long)]
-    pub motion: Option<String>,
     #[command(flatten)]
-    pub model: ModelArgs,
-    /// Shape coefficients, comma-separated (default: zeros).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    pub betas: Option<Vec<f64>>,
-    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset, over the configuration's; defaults
-    /// 100, 0.2, 1e-5).
-    #[arg(long)]
-    pub material: Option<String>,
+    pub inputs: SceneInputs,
+    /// `--body-model`'s old name, still accepted where it means the body model.
+    #[arg(long = "model", hide = true, conflicts_with = "body_model")]
+    pub model_alias: Option<PathBuf>,
     /// Cloth-body friction coefficient. Default: 0.3.
     #[arg(long)]
     pub friction: Option<f64>,
-    /// Output frames to simulate, blend-in and settle included (default: the whole motion).
-    #[arg(long)]
-    pub frames: Option<usize>,
-    /// Frames blending from the canonical pose and shape into the motion's first frame.
-    /// Default: 30.
-    #[arg(long)]
-    pub blend_frames: Option<usize>,
-    /// Frames holding the first frame after the blend. Default: 30.
-    #[arg(long)]
-    pub settle_frames: Option<usize>,
     /// Substeps per 30 fps frame. Default: 4.
     #[arg(long)]
     pub substeps: Option<usize>,
@@ -246,6 +219,46 @@ pub struct SceneArgs {
     /// Coulomb friction coefficient between layers of the garment. Default: 0.3.
     #[arg(long)]
     pub self_friction: Option<f64>,
+}
+
+/// What a scene is made of (garment, motion, body, shape, material, frames): the flags
+/// `simulate`, `demo` and `predict` share.
+#[derive(Debug, Args)]
+pub struct SceneInputs {
+    /// Start from the configuration a recording carries in its metadata (to simulate or
+    /// predict it again); flags override its values.
+    #[arg(long)]
+    pub config_from: Option<PathBuf>,
+    /// Garment: a library design (see `garments list`; its template is made once and cached),
+    /// the built-in skirt (`skirt`, `default`), or a template OBJ with UVs aligned to the
+    /// default body in its canonical A-pose. Default: `default`.
+    #[arg(long)]
+    pub garment: Option<String>,
+    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
+    /// AMASS .npz file. Default: `walk`.
+    #[arg(long)]
+    pub motion: Option<String>,
+    /// SMPL-format .npz body model file (SMPL_NEUTRAL.npz ...); the licence-free default body
+    /// if omitted (for `predict`, the body model the network was trained on).
+    #[arg(long)]
+    pub body_model: Option<PathBuf>,
+    /// Shape coefficients, comma-separated (default: zeros).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub betas: Option<Vec<f64>>,
+    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset, over the configuration's; defaults
+    /// 100, 0.2, 1e-5).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Output frames, blend-in and settle included (default: the whole motion).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Frames blending from the canonical pose and shape into the motion's first frame.
+    /// Default: 30.
+    #[arg(long)]
+    pub blend_frames: Option<usize>,
+    /// Frames holding the first frame after the blend. Default: 30.
+    #[arg(long)]
+    pub settle_frames: Option<usize>,
 }
 
 #[derive(Debug, Args)]

@@ -16,7 +16,7 @@ use sim::recording::Recording;
 use sim::run::Prepared;
 use sim::scene::RunSummary;
 
-use crate::cli::SceneArgs;
+use crate::cli::{SceneArgs, SceneInputs};
 use crate::inputs;
 
 /// The most compute threads (or synthesis jobs) a run may ask for.
@@ -40,39 +40,16 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
 /// configuration a `--config-from` recording carries, with every given flag over it;
 /// validated here, so a bad value is refused before a garment, motion or model is loaded.
 pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
-    let mut c = if let Some(path) = &args.config {
-        SceneConfig::load(path)?
-    } else if let Some(path) = &args.config_from {
-        config_of_recording(path)?
-    } else {
-        SceneConfig::default()
+    let mut c = match &args.config {
+        Some(path) => SceneConfig::load(path)?,
+        None => base_config(&args.inputs)?,
     };
-    if let Some(v) = &args.garment {
-        c.garment = v.clone();
-    }
-    if let Some(v) = &args.motion {
-        c.motion = v.clone();
-    }
-    if let Some(v) = &args.model.body_model {
+    apply_inputs(&mut c, &args.inputs)?;
+    if let Some(v) = &args.model_alias {
         c.model = Some(v.display().to_string());
-    }
-    if let Some(v) = &args.betas {
-        c.betas = v.clone();
-    }
-    if let Some(v) = &args.material {
-        c.material = c.material.with_overrides(v)?;
     }
     if let Some(v) = args.friction {
         c.friction = v;
-    }
-    if let Some(v) = args.frames {
-        c.frames = Some(v);
-    }
-    if let Some(v) = args.blend_frames {
-        c.blend_frames = v;
-    }
-    if let Some(v) = args.settle_frames {
-        c.settle_frames = v;
     }
     if let Some(v) = args.substeps {
         c.solver.substeps = v;
@@ -94,6 +71,52 @@ pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     }
     c.validate()?;
     Ok(c)
+}
+
+/// The configuration of a scene's inputs alone (`predict`): the defaults or a `--config-from`
+/// recording's, the flags over it, validated.
+pub fn resolve_inputs(inputs: &SceneInputs) -> Result<SceneConfig> {
+    let mut c = base_config(inputs)?;
+    apply_inputs(&mut c, inputs)?;
+    c.validate()?;
+    Ok(c)
+}
+
+/// The configuration a `--config-from` recording carries, else the defaults.
+fn base_config(inputs: &SceneInputs) -> Result<SceneConfig> {
+    match &inputs.config_from {
+        Some(path) => config_of_recording(path),
+        None => Ok(SceneConfig::default()),
+    }
+}
+
+/// The scene-input flags over `c`.
+fn apply_inputs(c: &mut SceneConfig, inputs: &SceneInputs) -> Result<()> {
+    if let Some(v) = &inputs.garment {
+        c.garment = v.clone();
+    }
+    if let Some(v) = &inputs.motion {
+        c.motion = v.clone();
+    }
+    if let Some(v) = &inputs.body_model {
+        c.model = Some(v.display().to_string());
+    }
+    if let Some(v) = &inputs.betas {
+        c.betas = v.clone();
+    }
+    if let Some(v) = &inputs.material {
+        c.material = c.material.with_overrides(v)?;
+    }
+    if let Some(v) = inputs.frames {
+        c.frames = Some(v);
+    }
+    if let Some(v) = inputs.blend_frames {
+        c.blend_frames = v;
+    }
+    if let Some(v) = inputs.settle_frames {
+        c.settle_frames = v;
+    }
+    Ok(())
 }
 
 /// The configuration a recording was simulated from.

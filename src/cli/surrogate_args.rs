@@ -3,27 +3,19 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use surrogate::predict::{Guidance, Settings};
 
+use super::SceneInputs;
+
+/// How the surrogate's sampler runs: the flags `predict` and `evaluate` share.
 #[derive(Debug, Args)]
-pub struct EvaluateArgs {
-    /// Trained model: a run folder, `builtin` (the shipped weights) or `none` (baselines only).
-    #[arg(long, default_value = "builtin")]
-    pub model: String,
-    /// Dataset folder (`synth --out`).
-    #[arg(long)]
-    pub data: PathBuf,
-    /// Splits to score, comma-separated (those without sequences are skipped).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "test,test_garment,test_motion,test_shape,test_material"
-    )]
-    pub splits: Vec<String>,
-    /// Euler steps of the model's sampler (default: the model's, 1 for a regression model,
-    /// 4 for a flow model).
+pub struct SamplerArgs {
+    /// Euler steps from noise to data (default: the model's, 1 for a regression model, 4
+    /// for a flow model).
     #[arg(long)]
     pub steps: Option<usize>,
-    /// Guidance weight of the `model` rows (`model_no_guidance` uses 0).
+    /// Intersection guidance weight (0 turns it off; `evaluate`'s `model` rows use it, its
+    /// `model_no_guidance` rows 0).
     #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
     pub guidance: f64,
     /// Fraction of the steps done before guidance starts (default: the model's, 0 for a
@@ -43,6 +35,44 @@ pub struct EvaluateArgs {
     /// Samples drawn per frame, each from its own noise, and averaged (1 to 64).
     #[arg(long, default_value_t = 1)]
     pub draws: usize,
+}
+
+impl SamplerArgs {
+    /// The sampler's settings: these flags over `defaults` (the model's).
+    pub fn settings(&self, defaults: Settings) -> Settings {
+        Settings {
+            steps: self.steps.unwrap_or(defaults.steps),
+            guidance: Guidance {
+                weight: self.guidance,
+                start: self.guidance_start.unwrap_or(defaults.guidance.start),
+                refine: self.guidance_refine.unwrap_or(defaults.guidance.refine),
+                ..Guidance::default()
+            },
+            seed: self.seed,
+            batch: self.batch,
+            draws: self.draws,
+            ..defaults
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct EvaluateArgs {
+    /// Trained model: a run folder, `builtin` (the shipped weights) or `none` (baselines only).
+    #[arg(long, default_value = "builtin")]
+    pub model: String,
+    /// Dataset folder (`synth --out`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Splits to score, comma-separated (those without sequences are skipped).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "test,test_garment,test_motion,test_shape,test_material"
+    )]
+    pub splits: Vec<String>,
+    #[command(flatten)]
+    pub sampler: SamplerArgs,
     /// Baselines, comma-separated: lbs, lbs_nearest, floor, rest.
     #[arg(
         long,
@@ -76,64 +106,13 @@ pub struct PredictArgs {
     /// Trained model: a run folder (`train --out`) or `builtin` (the shipped weights).
     #[arg(long, default_value = "builtin")]
     pub model: String,
-    /// Start from the inputs of a recording (its garment, motion, shape, material and frames)
-    /// to predict what it simulated; the flags below override them.
-    #[arg(long)]
-    pub config_from: Option<PathBuf>,
-    /// Garment: a library design, the built-in skirt (`skirt`, `default`) or a template OBJ
-    /// with UVs aligned to the default body in its canonical A-pose. Default: `default`.
-    #[arg(long)]
-    pub garment: Option<String>,
-    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
-    /// AMASS .npz file. Default: `walk`.
-    #[arg(long)]
-    pub motion: Option<String>,
-    /// SMPL-format .npz body model file: the one the model was trained on (default: the
-    /// licence-free default body).
-    #[arg(long)]
-    pub body_model: Option<PathBuf>,
-    /// Shape coefficients, comma-separated (default: zeros).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    pub betas: Option<Vec<f64>>,
-    /// Material as `k_s=N/m,rho=kg/m^2,k_b=N m` (any subset; defaults 100, 0.2, 1e-5).
-    #[arg(long)]
-    pub material: Option<String>,
-    /// Output frames, blend-in and settle included (default: the whole motion).
-    #[arg(long)]
-    pub frames: Option<usize>,
-    /// Frames blending from the canonical pose into the motion. Default: 30.
-    #[arg(long)]
-    pub blend_frames: Option<usize>,
-    /// Frames holding the first frame after the blend. Default: 30.
-    #[arg(long)]
-    pub settle_frames: Option<usize>,
-    /// Euler steps from noise to data (default: the model's, 1 for a regression model, 4
-    /// for a flow model).
-    #[arg(long)]
-    pub steps: Option<usize>,
+    #[command(flatten)]
+    pub scene: SceneInputs,
+    #[command(flatten)]
+    pub sampler: SamplerArgs,
     /// Time shift of the step schedule (1: uniform; above 1 spends more steps at high noise).
     #[arg(long, allow_hyphen_values = true, default_value_t = 1.0)]
     pub shift: f64,
-    /// Intersection guidance weight (0 turns it off).
-    #[arg(long, allow_hyphen_values = true, default_value_t = 5.0)]
-    pub guidance: f64,
-    /// Fraction of the steps done before guidance starts (default: the model's, 0 for a
-    /// regression model, 0.5 for a flow model).
-    #[arg(long, allow_hyphen_values = true)]
-    pub guidance_start: Option<f64>,
-    /// Guidance passes on the finished sample, without the network (default: the model's, 2
-    /// for a regression model, 0 for a flow model).
-    #[arg(long)]
-    pub guidance_refine: Option<usize>,
-    /// Seed of the initial noise.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Frames sampled together.
-    #[arg(long, default_value_t = 16)]
-    pub batch: usize,
-    /// Samples drawn per frame, each from its own noise, and averaged (1 to 64).
-    #[arg(long, default_value_t = 1)]
-    pub draws: usize,
     /// Draw the initial noise per frame (default: one noise for the whole sequence, which
     /// keeps frames coherent).
     #[arg(long)]

@@ -33,7 +33,10 @@ pub const DEMO_GARMENT: &str = "vneck_tee";
 pub fn run(args: &DemoArgs) -> Result<()> {
     let mut config = resolve_config(&args.scene)?;
     let scene = &args.scene;
-    if scene.garment.is_none() && scene.config.is_none() && scene.config_from.is_none() {
+    if scene.inputs.garment.is_none()
+        && scene.config.is_none()
+        && scene.inputs.config_from.is_none()
+    {
         config.garment = DEMO_GARMENT.to_string();
     }
     if print_config(&args.scene, &config)? {

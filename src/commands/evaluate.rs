@@ -14,14 +14,14 @@ use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
 use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, paper_numbers};
 use surrogate::evaluate::{Evaluation, UNITS, select};
-use surrogate::predict::{Guidance, Predictor, Settings};
+use surrogate::predict::{Predictor, Settings};
 use surrogate::train::TrainedModel;
 
 use crate::cli::EvaluateArgs;
 use crate::output::write_json;
 use crate::prediction::model_dir;
-use surrogate::evaluate::report::{self, Pictures};
 use crate::run::set_threads;
+use surrogate::evaluate::report::{self, Pictures};
 
 pub fn run(args: &EvaluateArgs) -> Result<()> {
     set_threads(args.threads)?;
@@ -42,20 +42,10 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         .as_ref()
         .map_or_else(Settings::default, Settings::for_model);
     let settings = Settings {
-        steps: args.steps.unwrap_or(defaults.steps),
-        guidance: Guidance {
-            weight: args.guidance,
-            start: args.guidance_start.unwrap_or(defaults.guidance.start),
-            refine: args.guidance_refine.unwrap_or(defaults.guidance.refine),
-            ..Guidance::default()
-        },
-        seed: args.seed,
-        batch: args.batch,
-        draws: args.draws,
         // The scores come from the predicted vertices; the sampler's own inside test would
         // only cost time.
         inside_test: false,
-        ..Settings::default()
+        ..args.sampler.settings(defaults)
     };
     if let Err(e) = settings.validate() {
         bail!("bad sampler settings: {e}");
@@ -220,4 +210,3 @@ pub fn print_table(splits: &SplitRows) {
         }
     }
 }
-

@@ -7,16 +7,16 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use serde_json::json;
 use surrogate::burn::prelude::Device;
-use surrogate::predict::{Guidance, Noise, Settings};
+use surrogate::predict::{Noise, Settings};
 use surrogate::train::TrainedModel;
 
-use crate::cli::{ModelArgs, PredictArgs, SceneArgs};
+use crate::cli::PredictArgs;
 use crate::output::write_json;
 use surrogate::predict::{PredictionStats, SceneRequest, predict_scene};
 
 use crate::prediction::model_dir;
 use crate::run::frames_bar;
-use crate::run::{prepare, resolve_config, set_threads};
+use crate::run::{prepare, resolve_inputs, set_threads};
 
 pub fn run(args: &PredictArgs) -> Result<()> {
     let started = Instant::now();
@@ -30,54 +30,21 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let run_dir = model_dir(&args.model)?;
     let trained = TrainedModel::load(&run_dir, &Device::flex())
         .with_context(|| format!("loading the model in {}", run_dir.display()))?;
-    let defaults = Settings::for_model(&trained);
     let settings = Settings {
-        steps: args.steps.unwrap_or(defaults.steps),
         shift: args.shift,
-        guidance: Guidance {
-            weight: args.guidance,
-            start: args.guidance_start.unwrap_or(defaults.guidance.start),
-            refine: args.guidance_refine.unwrap_or(defaults.guidance.refine),
-            ..Guidance::default()
-        },
-        seed: args.seed,
-        batch: args.batch,
         noise: if args.per_frame_noise {
             Noise::PerFrame
         } else {
             Noise::Shared
         },
-        draws: args.draws,
         resolve_penetration: args.resolve_penetration,
         inside_test: true,
+        ..args.sampler.settings(Settings::for_model(&trained))
     };
     if let Err(e) = settings.validate() {
         bail!("bad sampler settings: {e}");
     }
-
-    let scene_args = SceneArgs {
-        config: None,
-        config_from: args.config_from.clone(),
-        print_config: false,
-        garment: args.garment.clone(),
-        motion: args.motion.clone(),
-        model: ModelArgs {
-            body_model: args.body_model.clone(),
-        },
-        betas: args.betas.clone(),
-        material: args.material.clone(),
-        friction: None,
-        frames: args.frames,
-        blend_frames: args.blend_frames,
-        settle_frames: args.settle_frames,
-        substeps: None,
-        iterations: None,
-        acceleration: None,
-        no_self_contact: false,
-        self_contact_distance: None,
-        self_friction: None,
-    };
-    let config = resolve_config(&scene_args)?;
+    let config = resolve_inputs(&args.scene)?;
     let prepared = prepare(config)?;
     let model_name = run_dir.display().to_string();
     let software = format!("dit-garment {} predict", env!("CARGO_PKG_VERSION"));
