@@ -210,6 +210,26 @@ pub fn frames_bar(what: &str, frames: usize, quiet: bool) -> Result<ProgressBar>
     Ok(bar)
 }
 
+/// A progress bar for a GIF being drawn, shown from its first frame and cleared after its
+/// last.
+pub fn gif_progress() -> impl FnMut(usize, usize) {
+    let mut bar: Option<ProgressBar> = None;
+    move |done, total| {
+        let bar = bar.get_or_insert_with(|| {
+            let style = ProgressStyle::with_template(
+                "gif [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
+            )
+            .expect("a valid template")
+            .progress_chars("=> ");
+            ProgressBar::new(total as u64).with_style(style)
+        });
+        bar.set_position(done as u64);
+        if done == total {
+            bar.finish_and_clear();
+        }
+    }
+}
+
 /// The machine-readable summary (keys checked by scripts).
 pub fn summary_json(s: &RunSummary, out: &Path) -> serde_json::Value {
     json!({

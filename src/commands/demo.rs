@@ -22,7 +22,7 @@ use render::recording::{
 use surrogate::predict::{SceneRequest, predict_scene};
 
 use crate::prediction::model_dir;
-use crate::run::frames_bar;
+use crate::run::{frames_bar, gif_progress};
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
 
 /// The demo's garment: a library design the shipped model was not trained on (held out in
@@ -73,7 +73,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         gif: Some((2, 320)),
     };
     let pictures = out.join("pictures");
-    let mut progress = super::render::gif_progress();
+    let mut progress = gif_progress();
     let rendered = render_recording(
         &sequence,
         &prepared.model,

@@ -4,13 +4,13 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use render::recording::{RenderJob, render_recording, write_view};
 use render::{ColourScale, View};
 use serde_json::json;
 
 use crate::cli::{RenderArgs, ViewArgs};
 use crate::output::write_json;
+use crate::run::gif_progress;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let views = args
@@ -124,24 +124,4 @@ pub fn view(args: &ViewArgs) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
-}
-
-/// A progress bar for a GIF being drawn, shown from its first frame and cleared after its
-/// last.
-pub fn gif_progress() -> impl FnMut(usize, usize) {
-    let mut bar: Option<ProgressBar> = None;
-    move |done, total| {
-        let bar = bar.get_or_insert_with(|| {
-            let style = ProgressStyle::with_template(
-                "gif [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
-            )
-            .expect("a valid template")
-            .progress_chars("=> ");
-            ProgressBar::new(total as u64).with_style(style)
-        });
-        bar.set_position(done as u64);
-        if done == total {
-            bar.finish_and_clear();
-        }
-    }
 }
