@@ -87,9 +87,8 @@ pub struct DitConfig {
     pub body_inputs: bool,
     /// Whether the body inputs also hold, per texel, the offset to the nearest point of the
     /// posed body and its normal, 6 more channels (needs `body_inputs`; a saved configuration
-    /// without the key has none; left out when false, so configurations and evaluation
-    /// fingerprints of models without them stay as they were).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    /// without the key has none).
+    #[serde(default)]
     pub body_nearest: bool,
 }
 
