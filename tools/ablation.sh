@@ -8,6 +8,7 @@
 #   tools/ablation.sh tensors DATA OUT          # both tensor sets (zscore and bounded conditions)
 #   tools/ablation.sh tensors-designs DESIGNS OUT   # bounded tensors of specs/designs.toml's data (a5_*)
 #   tools/ablation.sh tensors-nearest DESIGNS OUT   # the same with the nearest-body inputs (a6_*)
+#   tools/ablation.sh tensors-kinds KINDS OUT       # bounded tensors of specs/kinds.toml's data (a7_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -28,6 +29,7 @@ tensors_of() {
     a0_* | a1_* | a2_*) echo zscore ;;
     a5_*) echo designs ;;
     a6_*) echo nearest ;;
+    a7_*) echo kinds ;;
     *) echo bounded ;;
   esac
 }
@@ -50,6 +52,11 @@ case "${1:-}" in
     [ -f "$out/tensors-nearest/manifest.json" ] ||
       "$bin" dataset tensors "$data" --out "$out/tensors-nearest" --target lbs_residual --conditions bounded \
         --body-nearest --quiet
+    ;;
+  tensors-kinds)
+    data=$2 out=$3
+    [ -f "$out/tensors-kinds/manifest.json" ] ||
+      "$bin" dataset tensors "$data" --out "$out/tensors-kinds" --target lbs_residual --conditions bounded --quiet
     ;;
   train)
     arm=$2 out=$3
@@ -79,7 +86,7 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,20p' "$0"
+    sed -n '2,21p' "$0"
     exit 2
     ;;
 esac

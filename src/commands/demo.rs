@@ -22,8 +22,8 @@ use render::recording::{
 use surrogate::predict::{SceneRequest, predict_scene};
 
 use crate::prediction::model_dir;
-use crate::run::{frames_bar, gif_progress};
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
+use crate::run::{frames_bar, gif_progress};
 
 /// The demo's garment: a library design the shipped model was not trained on (held out in
 /// specs/shipped.toml), of a family it was trained on (t-shirts), so the demo shows the

@@ -177,7 +177,8 @@ mod tests {
     fn record(id: &str, split: &str, ok: bool) -> ManifestRecord {
         let mut r: ManifestRecord = serde_json::from_value(json!({
             "id": id, "split": split, "garment": "skirt", "motion": "walk", "betas": [],
-            "material": {"stretch": 100.0, "density": 0.2, "bending": 1e-6}, "friction": 0.3,
+            "material": {"k_s_n_per_m": 100.0, "rho_kg_per_m2": 0.2, "k_b_n_m": 1e-6},
+            "friction": 0.3,
             "seed": 1, "frames": 10, "vertices": 4, "status": "ok", "attempts": [],
             "bytes": 0, "software": "test", "wall_s": 0.0
         }))
