@@ -5,9 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use sim::dataset::{
-    DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence, finished_record, load, stats,
-};
+use sim::dataset::{DatasetDir, ManifestRecord, load, stats};
 use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
@@ -196,81 +194,12 @@ fn stats_cmd(root: &Path, json: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
-/// Copies `from` to `to` atomically unless they are the same file.
-fn copy_into(from: &Path, to: &Path) -> Result<()> {
-    if from == to || (to.exists() && std::fs::canonicalize(from)? == std::fs::canonicalize(to)?) {
-        return Ok(());
-    }
-    crate::output::write_atomic(to, |w| {
-        use std::io::Read;
-        let (f, len) = files::open(from)?;
-        std::io::copy(&mut f.take(len), w)?;
-        Ok(())
-    })
-}
-
 fn merge(out: &Path, roots: &[std::path::PathBuf]) -> Result<()> {
-    let dirs: Vec<DatasetDir> = roots.iter().map(|r| DatasetDir::new(r)).collect();
-    let spec = DatasetSpec::load(&dirs[0].spec())?;
-    for d in &dirs[1..] {
-        if DatasetSpec::load(&d.spec())? != spec {
-            bail!(
-                "{} and {} hold different specs: they are not shards of one dataset",
-                dirs[0].root.display(),
-                d.root.display()
-            );
-        }
-    }
-    let planned: Vec<PlannedSequence> = files::read_json_lines(&dirs[0].plan(), "dataset plan")?;
-    // Find every planned sequence's finished record before writing anything.
-    let mut found = Vec::with_capacity(planned.len());
-    let mut missing = Vec::new();
-    for p in &planned {
-        match dirs
-            .iter()
-            .find_map(|d| finished_record(d, &p.id).map(|r| (d, r)))
-        {
-            Some(hit) => found.push(hit),
-            None => missing.push(p.id.as_str()),
-        }
-    }
-    if !missing.is_empty() {
-        bail!(
-            "{} of {} planned sequences have no finished record in {} (first: {}); finish those shards first",
-            missing.len(),
-            planned.len(),
-            roots
-                .iter()
-                .map(|r| r.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            missing[0]
-        );
-    }
-    let target = DatasetDir::new(out);
-    std::fs::create_dir_all(out)?;
-    copy_into(&dirs[0].spec(), &target.spec())?;
-    copy_into(&dirs[0].plan(), &target.plan())?;
-    let mut records = Vec::with_capacity(found.len());
-    for (d, r) in found {
-        r.check_paths()
-            .map_err(|e| anyhow::anyhow!("{}: {e}", d.manifest().display()))?;
-        if let Some(file) = &r.file {
-            copy_into(&d.root.join(file), &target.root.join(file))?;
-        }
-        let template = d.template(&r.garment);
-        if template.exists() {
-            copy_into(&template, &target.template(&r.garment))?;
-        }
-        copy_into(&d.record(&r.id), &target.record(&r.id))?;
-        records.push(r);
-    }
-    files::write_json_lines(&target.manifest(), &records)?;
+    let merged = sim::dataset::merge(out, roots)?;
     println!(
-        "merge: {} sequences from {} folders into {}",
-        records.len(),
-        dirs.len(),
-        target.manifest().display()
+        "merge: {merged} sequences from {} folders into {}",
+        roots.len(),
+        DatasetDir::new(out).manifest().display()
     );
     Ok(())
 }

@@ -9,6 +9,7 @@
 
 mod dir;
 mod manifest;
+mod merge;
 mod plan;
 mod spec;
 mod synth;
@@ -16,6 +17,7 @@ mod verify;
 
 pub use dir::{DatasetDir, finished_record};
 pub use manifest::{Attempt, GateResult, ManifestRecord, stats};
+pub use merge::merge;
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};
 pub use spec::{
     DatasetSpec, GarmentEntry, GateSpec, MaterialRanges, MotionEntry, SequenceSpec, SolverSpec,
