@@ -63,12 +63,12 @@ impl BodyParams {
 pub fn garment(
     source: &str,
     model: &BodyModel,
-) -> Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
+) -> sim::Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
     let cache = sim::templates::cache_dir();
-    Ok(sim::sources::garment(source, model, &cache, |path| {
+    sim::sources::garment(source, model, &cache, |path| {
         eprintln!(
             "making the template of '{source}' (first use; cached in {})",
             path.display()
         )
-    })?)
+    })
 }

@@ -38,15 +38,6 @@ pub fn write_obj(
     comment: &str,
 ) -> Result<()> {
     write_atomic(path, |w| {
-        for line in comment.lines() {
-            writeln!(w, "# {line}")?;
-        }
-        for v in vertices {
-            writeln!(w, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
-        }
-        for f in faces {
-            writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
-        }
-        Ok(())
+        Ok(garments::write_mesh_obj(w, comment, vertices, faces)?)
     })
 }

@@ -24,5 +24,5 @@ pub use check::{
 };
 pub use error::{Error, Result};
 pub use mesh::Garment;
-pub use obj::{parse_obj, read_obj, read_obj_numbered, write_obj, write_ply};
+pub use obj::{parse_obj, read_obj, read_obj_numbered, write_mesh_obj, write_obj, write_ply};
 pub use pattern::{Pattern, SewnMesh, joined_roots};

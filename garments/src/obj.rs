@@ -150,6 +150,26 @@ fn vertex_numbers(text: &[u8], positions: &[[f64; 3]]) -> Vec<u32> {
         .unwrap_or_default()
 }
 
+/// Writes a plain triangle mesh as OBJ: `comment` as `#` lines, the vertices in order (6
+/// decimals), 1-based faces. For meshes that are not garments (a posed body).
+pub fn write_mesh_obj<W: Write>(
+    out: &mut W,
+    comment: &str,
+    vertices: &[[f64; 3]],
+    faces: &[[u32; 3]],
+) -> std::io::Result<()> {
+    for line in comment.lines() {
+        writeln!(out, "# {line}")?;
+    }
+    for v in vertices {
+        writeln!(out, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
+    }
+    for f in faces {
+        writeln!(out, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
+    }
+    Ok(())
+}
+
 /// Writes the garment as OBJ text (v, vt, one `g` group per panel, f v/vt) to `out`, at
 /// `positions` when given (a simulated frame) or the template positions.
 pub fn write_obj<W: Write>(

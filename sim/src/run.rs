@@ -141,32 +141,29 @@ pub fn write_objs(
         garments::write_obj(w, garment, Some(cloth))
     })?;
     files::write_with(&dir.join(format!("body_{k:04}.obj")), |w| {
-        writeln!(w, "# body frame {k}")?;
-        for v in body {
-            writeln!(w, "v {:.6} {:.6} {:.6}", v[0], v[1], v[2])?;
-        }
-        for f in faces {
-            writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1)?;
-        }
-        Ok(())
+        garments::write_mesh_obj(w, &format!("body frame {k}"), body, faces)
     })?;
     Ok(())
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// A coarse built-in skirt (24 x 8) on the default body walking, `frames` frames.
-    fn skirt(frames: usize) -> Prepared {
-        let model = BodyModel::default_body();
+    /// A coarse built-in skirt (24 x 8) fitted to `model` and draped, with its attachments.
+    pub(crate) fn coarse_skirt(model: &BodyModel) -> (garments::Garment, Vec<BodyAttachment>) {
         let params = garments::SkirtParams {
             columns: 24,
             rings: 8,
             ..garments::SkirtParams::default()
         };
-        let (garment, attachments) =
-            crate::scene::builtin_template(&model, "skirt", &params).unwrap();
+        crate::scene::builtin_template(model, "skirt", &params).unwrap()
+    }
+
+    /// The coarse skirt on the default body walking, `frames` frames.
+    fn skirt(frames: usize) -> Prepared {
+        let model = BodyModel::default_body();
+        let (garment, attachments) = coarse_skirt(&model);
         let config = SceneConfig {
             frames: Some(frames),
             blend_frames: 2,

@@ -118,16 +118,10 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     names.dedup();
     // A template that fails its gates (a drawn design can) makes its sequences fail, not the
     // run; any other problem with a garment stops the run before the folder is touched.
-    let cache = sim::templates::cache_dir();
     let made = names
         .par_iter()
         .map(|name| {
-            let template = sim::sources::garment(name, &model, &cache, |path| {
-                eprintln!(
-                    "making the template of '{name}' (first use; cached in {})",
-                    path.display()
-                )
-            });
+            let template = crate::inputs::garment(name, &model);
             match template {
                 Ok((garment, attachments)) => {
                     Ok(((*name).clone(), Ok((Arc::new(garment), attachments))))

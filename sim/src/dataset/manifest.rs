@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 
-use super::plan::SPLITS;
+use super::plan::{PlannedSequence, SPLITS};
 use super::spec::GateSpec;
 use crate::SolverParams;
 use crate::params::Material;
@@ -166,6 +166,31 @@ pub struct ManifestRecord {
 }
 
 impl ManifestRecord {
+    /// The record of planned sequence `p` before any attempt: what the plan says of it,
+    /// `failed` with no attempts, no recording and no frames yet.
+    pub fn of_plan(p: &PlannedSequence, software: &str) -> Self {
+        Self {
+            id: p.id.clone(),
+            split: p.split.clone(),
+            garment: p.garment.clone(),
+            motion: p.motion.clone(),
+            betas: p.betas.clone(),
+            material: p.material,
+            friction: p.friction,
+            seed: p.seed,
+            frames: 0,
+            vertices: 0,
+            status: "failed".into(),
+            reason: None,
+            attempts: Vec::new(),
+            file: None,
+            sha256: None,
+            bytes: 0,
+            software: software.to_string(),
+            wall_s: 0.0,
+        }
+    }
+
     /// Whether the sequence passed its gates.
     pub fn ok(&self) -> bool {
         self.status == "ok"

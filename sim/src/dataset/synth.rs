@@ -148,24 +148,13 @@ impl Synthesis<'_> {
         let last = attempts.last().expect("at least one attempt");
         let ok = last.gates.passed;
         ManifestRecord {
-            id: p.id.clone(),
-            split: p.split.clone(),
-            garment: p.garment.clone(),
-            motion: p.motion.clone(),
-            betas: p.betas.clone(),
-            material: p.material,
-            friction: p.friction,
-            seed: p.seed,
             frames,
             vertices,
             status: if ok { "ok" } else { "failed" }.into(),
             reason: (!ok).then(|| last.gates.failed.join("; ")),
             attempts,
-            file: None,
-            sha256: None,
-            bytes: 0,
-            software: self.software.clone(),
             wall_s,
+            ..ManifestRecord::of_plan(p, &self.software)
         }
     }
 
@@ -305,13 +294,7 @@ split = "train"
     /// A coarse skirt template (24 x 8) on the default body.
     fn run<'a>(spec: &'a DatasetSpec, dir: &'a DatasetDir) -> Synthesis<'a> {
         let model = BodyModel::default_body();
-        let params = garments::SkirtParams {
-            columns: 24,
-            rings: 8,
-            ..garments::SkirtParams::default()
-        };
-        let (garment, attachments) =
-            crate::scene::builtin_template(&model, "skirt", &params).unwrap();
+        let (garment, attachments) = crate::run::tests::coarse_skirt(&model);
         Synthesis {
             spec,
             dir,

@@ -206,24 +206,8 @@ mod tests {
     /// A record of `p` that failed without a recording.
     fn failed(p: &PlannedSequence) -> ManifestRecord {
         ManifestRecord {
-            id: p.id.clone(),
-            split: p.split.clone(),
-            garment: p.garment.clone(),
-            motion: p.motion.clone(),
-            betas: p.betas.clone(),
-            material: p.material,
-            friction: p.friction,
-            seed: p.seed,
-            frames: 0,
-            vertices: 0,
-            status: "failed".into(),
             reason: Some("a test".into()),
-            attempts: Vec::new(),
-            file: None,
-            sha256: None,
-            bytes: 0,
-            software: "test".into(),
-            wall_s: 0.0,
+            ..ManifestRecord::of_plan(p, "test")
         }
     }
 
