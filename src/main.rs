@@ -6,7 +6,6 @@ mod cli;
 mod commands;
 mod inputs;
 mod output;
-mod prediction;
 mod run;
 mod scoring;
 

@@ -503,7 +503,7 @@ fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
     use surrogate::burn::prelude::Device;
     use surrogate::data::{Sequence, TrainingTensors};
     use surrogate::predict::{BodySequence, Predictor};
-    use surrogate::train::TrainedModel;
+    use surrogate::run::TrainedModel;
 
     let f = fixture();
     let tensors = TrainingTensors::open(&f.dir.join("tensors")).unwrap();

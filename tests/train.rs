@@ -181,7 +181,7 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
 
     // The weights load back into the model they came from, and reproduce the reference output.
     let device = surrogate::burn::prelude::Device::flex();
-    let (loaded, model) = surrogate::train::load_run(&run, &device).unwrap();
+    let (loaded, model) = surrogate::run::load_run(&run, &device).unwrap();
     assert_eq!(loaded.model.width, 16);
     let reference = std::fs::read(run.join("reference.safetensors")).unwrap();
     let reference = safetensors::SafeTensors::deserialize(&reference).unwrap();
@@ -221,7 +221,7 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
         config_text.replace("condition_tokens = 2", "condition_tokens = 3"),
     )
     .unwrap();
-    let err = surrogate::train::load_run(&run, &device)
+    let err = surrogate::run::load_run(&run, &device)
         .expect_err("refused")
         .to_string();
     assert!(

@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use sim::run::Prepared;
 use surrogate::burn::prelude::Device;
 use surrogate::predict::Settings;
-use surrogate::train::TrainedModel;
+use surrogate::run::TrainedModel;
 
 use crate::cli::DemoArgs;
 use crate::output::write_json;
@@ -21,7 +21,6 @@ use render::recording::{
 };
 use surrogate::predict::{SceneRequest, predict_scene};
 
-use crate::prediction::model_dir;
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
 use crate::run::{frames_bar, gif_progress};
 
@@ -48,9 +47,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let surrogate = match args.surrogate.as_str() {
         "none" => None,
         name => {
-            let dir = model_dir(name)?;
-            let trained = TrainedModel::load(&dir, &Device::flex())
-                .with_context(|| format!("loading the model in {}", dir.display()))?;
+            let trained = TrainedModel::load_named(name, &Device::flex())?;
             Some((name.to_string(), trained))
         }
     };

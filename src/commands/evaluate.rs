@@ -15,11 +15,10 @@ use surrogate::evaluate::baselines::{Baseline, FloorMaps};
 use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, paper_numbers};
 use surrogate::evaluate::{Evaluation, UNITS, select};
 use surrogate::predict::{Predictor, Settings};
-use surrogate::train::TrainedModel;
+use surrogate::run::TrainedModel;
 
 use crate::cli::EvaluateArgs;
 use crate::output::write_json;
-use crate::prediction::model_dir;
 use crate::run::set_threads;
 use surrogate::evaluate::report::{self, Pictures};
 
@@ -30,13 +29,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     }
     let trained = match args.model.as_str() {
         "none" => None,
-        name => {
-            let dir = model_dir(name)?;
-            Some(
-                TrainedModel::load(&dir, &Device::flex())
-                    .with_context(|| format!("loading the model in {}", dir.display()))?,
-            )
-        }
+        name => Some(TrainedModel::load_named(name, &Device::flex())?),
     };
     let defaults = trained
         .as_ref()

@@ -4,17 +4,16 @@
 
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use serde_json::json;
 use surrogate::burn::prelude::Device;
 use surrogate::predict::{Noise, Settings};
-use surrogate::train::TrainedModel;
+use surrogate::run::TrainedModel;
 
 use crate::cli::PredictArgs;
 use crate::output::write_json;
 use surrogate::predict::{PredictionStats, SceneRequest, predict_scene};
 
-use crate::prediction::model_dir;
 use crate::run::frames_bar;
 use crate::run::{prepare, resolve_inputs, set_threads};
 
@@ -27,9 +26,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
             args.out.display()
         );
     }
-    let run_dir = model_dir(&args.model)?;
-    let trained = TrainedModel::load(&run_dir, &Device::flex())
-        .with_context(|| format!("loading the model in {}", run_dir.display()))?;
+    let trained = TrainedModel::load_named(&args.model, &Device::flex())?;
     let settings = Settings {
         shift: args.shift,
         noise: if args.per_frame_noise {
@@ -46,7 +43,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     }
     let config = resolve_inputs(&args.scene)?;
     let prepared = prepare(config)?;
-    let model_name = run_dir.display().to_string();
+    let model_name = trained.run.display().to_string();
     let software = format!("dit-garment {} predict", env!("CARGO_PKG_VERSION"));
     let prepared_s = started.elapsed().as_secs_f64();
     let request = SceneRequest {

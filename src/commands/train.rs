@@ -5,7 +5,8 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use surrogate::burn::prelude::Device;
 use surrogate::data::TrainingTensors;
-use surrogate::train::{Event, RunConfig, TrainOptions, train};
+use surrogate::run::RunConfig;
+use surrogate::train::{Event, TrainOptions, train};
 
 use crate::cli::TrainArgs;
 use crate::run::set_threads;

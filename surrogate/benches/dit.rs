@@ -13,7 +13,8 @@ use burn::optim::GradientsParams;
 use burn::prelude::*;
 use burn::tensor::Distribution;
 use surrogate::model::{Depthwise, Dit, DitConfig};
-use surrogate::train::{TrainConfig, clip_global_norm};
+use surrogate::run::TrainConfig;
+use surrogate::train::clip_global_norm;
 
 fn inputs(b: usize, r: usize, d: usize) -> (Tensor<4>, Tensor<4>, Tensor<4>, Tensor<1>, Tensor<2>) {
     let device = Device::flex();

@@ -2,8 +2,10 @@
 //! encode, chart-aware readback and its transpose), the canonical frame, the two training
 //! targets (`displacement` and `lbs_residual`), the condition vector, and the training
 //! tensors a dataset becomes (`geometry`, `data`); the diffusion transformer (`model`), its
-//! training with rectified flow (`train`), the Euler sampler (`sample`) and the prediction of
-//! whole sequences with intersection guidance (`predict`).
+//! training with rectified flow (`train`) and the flow maths training and sampling share
+//! (`flow`: interpolation, targets, x0 <-> velocity, the time grid, the Euler sampler), the
+//! trained run folder (`run`) and the prediction of whole sequences with intersection guidance
+//! (`predict`), which reads runs and never depends on training.
 //!
 //! Depends on `sim` for recordings and materials as plain data, never on the scene runner.
 #![warn(missing_docs)]
@@ -11,11 +13,12 @@
 pub mod data;
 mod error;
 pub mod evaluate;
+pub mod flow;
 pub mod geometry;
 pub mod model;
 pub mod noise;
 pub mod predict;
-pub mod sample;
+pub mod run;
 pub mod train;
 
 /// The burn version the model is written for, for callers that build inputs.

@@ -30,10 +30,10 @@ use sim::recording::TemplateArrays;
 
 use crate::data::{ConditionLayout, body_input_maps, channels_first};
 use crate::error::{Error, Result};
+use crate::flow::{Conditioned, euler, time_grid};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
 use crate::noise::{generator, normal};
-use crate::sample::{Conditioned, euler, time_grid};
-use crate::train::{Objective, TrainedModel};
+use crate::run::{Objective, TrainedModel};
 
 /// Euler steps by default (chosen from the steps sweep in docs/SURROGATE.md).
 pub const DEFAULT_STEPS: usize = 4;

@@ -15,7 +15,7 @@ use sim::scene::FPS;
 
 use super::{BodySequence, Predictor, PreparedGarment, Settings, Timing};
 use crate::error::{Error, Result, file_error};
-use crate::train::TrainedModel;
+use crate::run::TrainedModel;
 
 /// The recording's metadata: a garment sequence's, plus what made the prediction.
 #[derive(Serialize)]

@@ -8,10 +8,11 @@ use burn::prelude::*;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use super::config::{Objective, TimeSampling, TrainConfig};
 use crate::data::{Frames, TrainingTensors};
+use crate::flow;
 use crate::model::{DitConfig, Prediction};
 use crate::noise::{generator, normal};
+use crate::run::{Objective, TimeSampling, TrainConfig};
 
 /// Stream of the training batches.
 pub const TRAIN_STREAM: u64 = 1;
@@ -115,11 +116,8 @@ impl Batch {
                     x
                 };
                 let eps = normal(rng);
-                b.noisy.push((1.0 - s) * x + s * eps);
-                b.target.push(match prediction {
-                    Prediction::Velocity => eps - x,
-                    Prediction::Data => x,
-                });
+                b.noisy.push(flow::interpolate(x, eps, s));
+                b.target.push(flow::target(prediction, x, eps));
             }
             b.position
                 .extend_from_slice(&tensors.position_maps[g * 3 * plane..(g + 1) * 3 * plane]);

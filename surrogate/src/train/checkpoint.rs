@@ -10,9 +10,9 @@ use burn::optim::{AdamWConfig, ModuleOptimizer};
 use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::config::{RunConfig, TrainConfig};
 use crate::error::{Result, file_error};
 use crate::model::Dit;
+use crate::run::{RunConfig, TrainConfig};
 use files::{sha256_hex, write_atomic};
 
 /// The counters a resumed run continues from.
@@ -54,7 +54,7 @@ const CHECKSUMS: &str = "checksums.json";
 /// was introduced), the SHA-256 each was written with.
 fn verify_checksums(dir: &Path) -> Result<()> {
     for file in CHECKPOINT_FILES {
-        super::export::check_weights_file(&dir.join(file))?;
+        crate::run::check_weights_file(&dir.join(file))?;
     }
     let path = dir.join(CHECKSUMS);
     if !path.exists() {

@@ -10,9 +10,8 @@
 
 mod batch;
 pub(crate) mod checkpoint;
-mod config;
-mod export;
 mod optim;
+mod reference;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -23,15 +22,15 @@ use serde::{Deserialize, Serialize};
 
 pub use batch::{Batch, Recipe, validation_batches};
 pub use checkpoint::RunState;
-pub use config::{Objective, RunConfig, TimeSampling, TrainConfig};
-pub use export::{TENSORS_MANIFEST, TrainedModel, load_run, save_reference, save_weights};
 use files::write_atomic;
 pub use optim::{clip_global_norm, ema_decay, update_ema};
+pub use reference::save_reference;
 
 use crate::data::TrainingTensors;
 use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
 use crate::noise::generator;
+use crate::run::{RunConfig, TENSORS_MANIFEST, TrainConfig, save_weights};
 
 /// One line of `log.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -120,16 +119,6 @@ pub enum Event {
     },
     /// A log line was written.
     Log(LogLine),
-}
-
-impl RunConfig {
-    /// Sets what the tensors decide (resolution, condition length, target).
-    pub fn fit_to(&mut self, tensors: &TrainingTensors) {
-        let m = &tensors.manifest;
-        self.model.resolution = m.resolution;
-        self.model.condition_dim = m.condition_dim;
-        self.model.target = m.target;
-    }
 }
 
 /// The weighted validation loss of `model` over `batches`, run on `device`.

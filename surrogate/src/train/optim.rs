@@ -102,7 +102,7 @@ pub fn update_ema(ema: Dit, model: &Dit, decay: f64) -> Dit {
 mod tests {
     use super::*;
     use crate::model::DitConfig;
-    use crate::train::TrainConfig;
+    use crate::run::TrainConfig;
     use burn::tensor::Distribution;
 
     #[test]

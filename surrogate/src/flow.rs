@@ -1,11 +1,33 @@
-//! Sampling a trained model: the Euler integrator of rectified flow from noise (s = 1) to data
-//! (s = 0), with Sana's optional time shift and a hook that corrects the velocity at each step
-//! (intersection guidance plugs in there). Frames are independent: a batch is any set of
+//! The maths of rectified flow, in one place for training and sampling: the interpolation
+//! z_s = (1 - s) z0 + s eps between data (s = 0) and noise (s = 1), what the network is
+//! trained towards (the velocity eps - z0 or the data z0), the velocity an output stands for
+//! and the data estimate a velocity implies, the time grid, and the Euler integrator from
+//! noise to data with Sana's optional time shift and a hook that corrects the velocity at each
+//! step (intersection guidance plugs in there). Frames are independent: a batch is any set of
 //! frames, and frames that share their initial noise stay coherent over time.
 
 use burn::prelude::*;
 
 use crate::model::{Dit, Prediction};
+
+/// The state at time `s` between the data value `z0` and the noise `eps`.
+pub fn interpolate(z0: f32, eps: f32, s: f32) -> f32 {
+    (1.0 - s) * z0 + s * eps
+}
+
+/// What a network that outputs `prediction` is trained towards at a value `z0` noised by
+/// `eps`: the velocity eps - z0 (constant along the straight path) or z0 itself.
+pub fn target(prediction: Prediction, z0: f32, eps: f32) -> f32 {
+    match prediction {
+        Prediction::Velocity => eps - z0,
+        Prediction::Data => z0,
+    }
+}
+
+/// The data estimate x0 = x - s v of state `x` at time `s` moving with velocity `v`.
+pub fn data_estimate(x: Tensor<4>, v: Tensor<4>, s: f64) -> Tensor<4> {
+    x - v.mul_scalar(s as f32)
+}
 
 /// The times of an `steps`-step schedule from 1 to 0: s_k = 1 - k / steps, shifted by
 /// s' = k s / (1 + (k - 1) s) when `shift` is not 1 (shift > 1 spends more steps at high
@@ -85,7 +107,7 @@ pub fn euler(
     for (k, pair) in grid.windows(2).enumerate() {
         let (s, next) = (pair[0], pair[1]);
         let mut v = field.velocity(x.clone(), s);
-        let x0_hat = x.clone() - v.clone().mul_scalar(s as f32);
+        let x0_hat = data_estimate(x.clone(), v.clone(), s);
         if let Some(extra) = correct(k, s, &x0_hat) {
             v = v + extra;
         }

@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::data::TrainingTensors;
 use crate::error::{Error, Result};
 use crate::model::DitConfig;
 
@@ -259,6 +260,14 @@ impl RunConfig {
             config.training.zero_outside = false;
         }
         Ok(config)
+    }
+
+    /// Sets what the tensors decide (resolution, condition length, target).
+    pub fn fit_to(&mut self, tensors: &TrainingTensors) {
+        let m = &tensors.manifest;
+        self.model.resolution = m.resolution;
+        self.model.condition_dim = m.condition_dim;
+        self.model.target = m.target;
     }
 
     /// The first key whose value differs from `other`'s, as `key = here (there)`.
