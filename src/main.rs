@@ -7,7 +7,6 @@ mod commands;
 mod inputs;
 mod output;
 mod run;
-mod scoring;
 
 use std::process::ExitCode;
 

@@ -161,7 +161,7 @@ pub(crate) mod tests {
     }
 
     /// The coarse skirt on the default body walking, `frames` frames.
-    fn skirt(frames: usize) -> Prepared {
+    pub(crate) fn skirt(frames: usize) -> Prepared {
         let model = BodyModel::default_body();
         let (garment, attachments) = coarse_skirt(&model);
         let config = SceneConfig {

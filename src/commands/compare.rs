@@ -3,46 +3,19 @@
 
 use anyhow::Result;
 use serde_json::json;
-use sim::metrics::{FRAME_STRIDE, Scores};
+use sim::metrics::{FRAME_STRIDE, Scores, compare_recordings};
 
 use crate::cli::CompareArgs;
 use crate::output::write_json;
-use crate::scoring::score;
-
-const UNITS: [(&str, &str); 9] = [
-    ("E_v", "cm"),
-    ("E_CD", "100 m^2 (squared distances)"),
-    ("E_CD_cm", "cm"),
-    ("E_n", "1 (sum of both directions)"),
-    ("E_c", "% of garment surface samples inside the body"),
-    ("E_c_vertex", "% of garment vertices inside the body"),
-    ("E_b", "rad"),
-    ("E_s", "1 (x 1e5)"),
-    ("E_d", "cm"),
-];
-
-fn values(s: &Scores) -> [f64; 9] {
-    [
-        s.E_v,
-        s.E_CD,
-        s.E_CD_cm,
-        s.E_n,
-        s.E_c,
-        s.E_c_vertex,
-        s.E_b,
-        s.E_s,
-        s.E_d,
-    ]
-}
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     let model = sim::sources::body_model(args.model.body_model.as_deref())?;
-    let c = score(&args.a, &args.b, &model, args.seed)?;
+    let c = compare_recordings(&args.a, &args.b, &model, args.seed)?;
     if args.per_frame {
         for (k, s) in &c.per_frame {
             println!(
                 "frame {k:5}: {}",
-                values(s)
+                s.values()
                     .iter()
                     .map(|v| format!("{v:9.4}"))
                     .collect::<Vec<_>>()
@@ -56,7 +29,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         args.a.display(),
         c.per_frame.len()
     );
-    for ((name, unit), v) in UNITS.iter().zip(values(&c.mean)) {
+    for ((name, unit), v) in Scores::UNITS.iter().zip(c.mean.values()) {
         println!("  {name:<11} {v:10.4}  {unit}");
     }
     println!(
@@ -69,7 +42,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "E_v": mean.E_v, "E_CD": mean.E_CD, "E_CD_cm": mean.E_CD_cm, "E_n": mean.E_n,
             "E_c": mean.E_c, "E_c_vertex": mean.E_c_vertex, "E_b": mean.E_b, "E_s": mean.E_s,
             "E_d": mean.E_d, "frames_scored": c.per_frame.len(),
-            "units": UNITS.iter().map(|(n, u)| (n.to_string(), json!(u))).collect::<serde_json::Map<_, _>>(),
+            "units": Scores::UNITS.iter().map(|(n, u)| (n.to_string(), json!(u))).collect::<serde_json::Map<_, _>>(),
             "samples_per_mesh": sim::metrics::SAMPLES, "seed": args.seed,
             "jitter": c.jitter_b, "jitter_a": c.jitter_a, "frames": c.frames,
         });

@@ -137,7 +137,7 @@ fn predict_and_compare(
     let p = predict_scene(prepared, &request, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     let truth = out.join("sequence.mcap");
-    let scores = crate::scoring::score(&truth, &path, &prepared.model, 0)?;
+    let scores = sim::metrics::compare_recordings(&truth, &path, &prepared.model, 0)?;
     let n = p.frames;
     let frames: Vec<usize> = (0..6).map(|i| i * (n - 1) / 5).collect();
     let sheet = pictures.join("comparison_sheet.png");

@@ -13,7 +13,7 @@ use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
 use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, paper_numbers};
-use surrogate::evaluate::{Evaluation, UNITS, select};
+use surrogate::evaluate::{Evaluation, select, units};
 use surrogate::predict::{Predictor, Settings};
 use surrogate::run::TrainedModel;
 
@@ -137,10 +137,6 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let reused = results.iter().filter(|(_, hit)| *hit).count();
     let results: Vec<SequenceResult> = results.into_iter().map(|(r, _)| r).collect();
     let (splits, simulation) = aggregate(&results);
-    let units: serde_json::Map<String, Value> = UNITS
-        .iter()
-        .map(|(k, u)| (k.to_string(), json!(u)))
-        .collect();
     let settings_json = json!({
         "steps": settings.steps, "guidance": settings.guidance.weight,
         "guidance_start": settings.guidance.start, "seed": settings.seed,
@@ -154,7 +150,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         "sequences": results,
         "model": model_json,
         "settings": settings_json,
-        "units": units,
+        "units": units(),
         "paper": paper_numbers(),
     });
     if let Some(path) = &args.json {

@@ -75,7 +75,7 @@ impl Method {
 /// The figures of one method on one sequence, or their mean over sequences.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct MethodScores {
-    /// The paper's metrics (units in [`UNITS`]).
+    /// The paper's metrics (units in [`units`]).
     #[serde(flatten)]
     pub scores: Scores,
     /// Mean |second difference| of vertex positions over the motion frames, cm.
@@ -106,20 +106,8 @@ pub struct MethodScores {
     pub sequences: usize,
 }
 
-/// Every key of a [`MethodScores`] with its unit.
-pub const UNITS: [(&str, &str); 19] = [
-    ("E_v", "cm"),
-    ("E_CD", "100 m^2 (squared distances)"),
-    ("E_CD_cm", "cm"),
-    ("E_n", "1 (sum of both directions)"),
-    ("E_c", "% of garment surface samples inside the body"),
-    (
-        "E_c_vertex",
-        "% of garment vertices inside the body (nearest body sample)",
-    ),
-    ("E_b", "rad"),
-    ("E_s", "1 (x 1e5)"),
-    ("E_d", "cm"),
+/// The units of a [`MethodScores`]'s keys besides the paper's metrics ([`Scores::UNITS`]).
+const MORE_UNITS: [(&str, &str); 10] = [
     ("jitter", "cm (mean second difference over frames)"),
     ("stretch_p99", "1 (edge length over rest length)"),
     (
@@ -140,6 +128,15 @@ pub const UNITS: [(&str, &str); 19] = [
     ("frames_scored", "count"),
     ("frames_predicted", "count"),
 ];
+
+/// Every key of a [`MethodScores`] with its unit, as a JSON object.
+pub fn units() -> serde_json::Map<String, serde_json::Value> {
+    Scores::UNITS
+        .iter()
+        .chain(&MORE_UNITS)
+        .map(|(k, u)| (k.to_string(), u.to_string().into()))
+        .collect()
+}
 
 impl MethodScores {
     /// The mean of sequences' rows (fps: frames predicted over their summed time; counts

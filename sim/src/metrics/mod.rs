@@ -20,6 +20,9 @@ pub const SAMPLES: usize = 50_000;
 pub const FRAME_STRIDE: usize = 5;
 
 type P3 = [f64; 3];
+
+mod compare;
+pub use compare::{Compared, compare_recordings};
 type Tree = ImmutableKdTree<f64, u32, 3, 32>;
 
 fn sub(a: P3, b: P3) -> P3 {
@@ -64,6 +67,37 @@ pub struct Scores {
 }
 
 impl Scores {
+    /// Every score's key with its unit, in the order of [`Scores::values`].
+    pub const UNITS: [(&str, &str); 9] = [
+        ("E_v", "cm"),
+        ("E_CD", "100 m^2 (squared distances)"),
+        ("E_CD_cm", "cm"),
+        ("E_n", "1 (sum of both directions)"),
+        ("E_c", "% of garment surface samples inside the body"),
+        (
+            "E_c_vertex",
+            "% of garment vertices inside the body (nearest body sample)",
+        ),
+        ("E_b", "rad"),
+        ("E_s", "1 (x 1e5)"),
+        ("E_d", "cm"),
+    ];
+
+    /// The scores in the order of [`Scores::UNITS`].
+    pub fn values(&self) -> [f64; 9] {
+        [
+            self.E_v,
+            self.E_CD,
+            self.E_CD_cm,
+            self.E_n,
+            self.E_c,
+            self.E_c_vertex,
+            self.E_b,
+            self.E_s,
+            self.E_d,
+        ]
+    }
+
     fn add(&mut self, o: &Scores, w: f64) {
         self.E_v += w * o.E_v;
         self.E_CD += w * o.E_CD;
