@@ -6,10 +6,74 @@
 use std::path::Path;
 
 use motions::library::MotionSpec;
-use motions::{BodyModel, Motion, ShapedBody};
+use motions::{BodyModel, FramePose, Motion, POSE_DIM, ShapedBody};
+use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::scene::BodyAttachment;
+
+/// Body parameters of one pose (`body --params`): JSON with `betas`, `pose` (72 axis-angle
+/// values, radians) and `transl` (metres), all optional.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyParams {
+    /// Shape coefficients.
+    #[serde(default)]
+    pub betas: Vec<f64>,
+    /// 72 axis-angle values: global_orient 3 + body_pose 69.
+    #[serde(default)]
+    pub pose: Option<Vec<f64>>,
+    /// Root translation.
+    #[serde(default)]
+    pub transl: Option<Vec<f64>>,
+}
+
+impl BodyParams {
+    /// Reads a parameters file and checks its lengths and numbers.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = files::read_to_string(path, files::limits::TEXT, "body parameters")?;
+        let bad = |message: String| Error::Config {
+            path: path.display().to_string(),
+            message,
+        };
+        let params: Self = serde_json::from_str(&text)
+            .map_err(|e| bad(format!("not a valid body parameters file: {e}")))?;
+        for (key, values, expected) in [
+            ("pose", &params.pose, POSE_DIM),
+            ("transl", &params.transl, 3),
+        ] {
+            if let Some(v) = values.as_ref().filter(|v| v.len() != expected) {
+                return Err(bad(format!(
+                    "'{key}' has {} values, expected {expected}",
+                    v.len()
+                )));
+            }
+        }
+        let all = params.betas.iter().chain(params.pose.iter().flatten());
+        if all
+            .chain(params.transl.iter().flatten())
+            .any(|v| !v.is_finite())
+        {
+            return Err(bad("holds a non-finite number".into()));
+        }
+        Ok(params)
+    }
+
+    /// The pose and translation (the rest pose at the origin where absent).
+    pub fn frame(&self) -> FramePose {
+        let mut frame = FramePose {
+            pose: [0.0; POSE_DIM],
+            transl: [0.0; 3],
+        };
+        if let Some(pose) = &self.pose {
+            frame.pose.copy_from_slice(pose);
+        }
+        if let Some(t) = &self.transl {
+            frame.transl.copy_from_slice(t);
+        }
+        frame
+    }
+}
 
 /// The body model in `path`, or the default body (CC0) without one.
 pub fn body_model(path: Option<&Path>) -> Result<BodyModel> {
@@ -91,5 +155,40 @@ mod tests {
         );
         let e = garment("missing.obj", &model, cache.path(), |_| {}).unwrap_err();
         assert!(e.to_string().contains("garment file"), "{e}");
+    }
+
+    #[test]
+    fn body_parameters_are_read_with_their_lengths_checked() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            path
+        };
+        let ok = file("ok.json", r#"{"betas": [1.0], "transl": [0.0, 1.0, 2.0]}"#);
+        let params = BodyParams::load(&ok).unwrap();
+        let frame = params.frame();
+        assert_eq!(frame.transl, [0.0, 1.0, 2.0]);
+        assert_eq!(frame.pose, [0.0; POSE_DIM]);
+        for (name, text, expected) in [
+            (
+                "short.json",
+                r#"{"pose": [0.0, 1.0]}"#,
+                "'pose' has 2 values, expected 72",
+            ),
+            (
+                "transl.json",
+                r#"{"transl": [0.0]}"#,
+                "'transl' has 1 values, expected 3",
+            ),
+            (
+                "key.json",
+                r#"{"shape": []}"#,
+                "not a valid body parameters file",
+            ),
+        ] {
+            let e = BodyParams::load(&file(name, text)).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains(expected), "{e}");
+        }
     }
 }

@@ -1,11 +1,10 @@
 //! `dit-garment body`: pose a body and write it as OBJ (and its numbers as JSON).
 
 use anyhow::{Result, bail};
-use motions::{FramePose, POSE_DIM};
 use serde_json::json;
+use sim::sources::BodyParams;
 
 use crate::cli::BodyArgs;
-use crate::inputs::BodyParams;
 use crate::output::{write_json, write_obj};
 
 pub fn run(args: &BodyArgs) -> Result<()> {
@@ -18,16 +17,7 @@ pub fn run(args: &BodyArgs) -> Result<()> {
         None => BodyParams::default(),
     };
     let shaped = model.shape(&params.betas)?;
-    let mut frame = FramePose {
-        pose: [0.0; POSE_DIM],
-        transl: [0.0; 3],
-    };
-    if let Some(pose) = &params.pose {
-        frame.pose.copy_from_slice(pose);
-    }
-    if let Some(t) = &params.transl {
-        frame.transl.copy_from_slice(t);
-    }
+    let mut frame = params.frame();
     if let (Some(source), Some(k)) = (&args.motion, args.frame) {
         let motion = sim::sources::motion(source, &model, &shaped)?;
         let Some(f) = motion.frames.get(k) else {
