@@ -1,5 +1,7 @@
 //! A garment as the commands load it: with a notice when its template is first made.
 
+use std::path::Path;
+
 use motions::BodyModel;
 
 /// A garment template and its body attachments ([`sim::sources::garment`]), a library
@@ -9,10 +11,15 @@ pub fn garment(
     model: &BodyModel,
 ) -> sim::Result<(garments::Garment, Vec<sim::scene::BodyAttachment>)> {
     let cache = sim::templates::cache_dir();
-    sim::sources::garment(source, model, &cache, |path| {
+    sim::sources::garment(source, model, &cache, making_template(source))
+}
+
+/// The notice that the template of `source` is being made (the first use of a design).
+pub fn making_template(source: &str) -> impl FnOnce(&Path) + '_ {
+    move |path| {
         eprintln!(
             "making the template of '{source}' (first use; cached in {})",
             path.display()
         )
-    })
+    }
 }

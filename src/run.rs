@@ -5,7 +5,6 @@
 
 use std::io::Write;
 use std::path::Path;
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -85,7 +84,7 @@ pub fn resolve_inputs(inputs: &SceneInputs) -> Result<SceneConfig> {
 /// The configuration a `--config-from` recording carries, else the defaults.
 fn base_config(inputs: &SceneInputs) -> Result<SceneConfig> {
     match &inputs.config_from {
-        Some(path) => config_of_recording(path),
+        Some(path) => Ok(Recording::scene_config(path)?),
         None => Ok(SceneConfig::default()),
     }
 }
@@ -119,22 +118,6 @@ fn apply_inputs(c: &mut SceneConfig, inputs: &SceneInputs) -> Result<()> {
     Ok(())
 }
 
-/// The configuration a recording was simulated from.
-pub fn config_of_recording(path: &Path) -> Result<SceneConfig> {
-    let recording = Recording::read(path)?;
-    let meta = recording
-        .meta
-        .with_context(|| format!("{}: the recording has no metadata", path.display()))?;
-    match meta.config {
-        Some(config) => Ok(config),
-        None => bail!(
-            "{}: the recording carries no scene configuration (made by an older version, or a \
-             predicted sequence); pass the scene's flags or a --config file instead",
-            path.display()
-        ),
-    }
-}
-
 /// With `--print-config`: validates the configuration and prints it as TOML; returns whether
 /// it did (the command then stops).
 pub fn print_config(args: &SceneArgs, config: &SceneConfig) -> Result<bool> {
@@ -150,15 +133,12 @@ pub fn print_config(args: &SceneArgs, config: &SceneConfig) -> Result<bool> {
 
 /// Loads what the configuration names (body model, garment, motion) and builds its scene.
 pub fn prepare(config: SceneConfig) -> Result<Prepared> {
-    let model = Arc::new(sim::sources::body_model(
-        config.model.as_deref().map(Path::new),
-    )?);
-    let (garment, attachments) = inputs::garment(&config.garment, &model)?;
-    Ok(Prepared::with_motion_of(
-        model,
-        Arc::new(garment),
-        attachments,
+    let garment = config.garment.clone();
+    let cache = sim::templates::cache_dir();
+    Ok(Prepared::load(
         config,
+        &cache,
+        inputs::making_template(&garment),
     )?)
 }
 
@@ -177,7 +157,7 @@ pub struct RecordOptions<'a> {
 /// `options` ask.
 pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSummary> {
     let software = format!("dit-garment {}", env!("CARGO_PKG_VERSION"));
-    let bar = frames_bar("simulating", p.scene.num_frames(), options.quiet)?;
+    let bar = frames_bar("simulating", p.scene.num_frames(), options.quiet);
     let summary = p.record_file(out, &software, options.deadline, |frame| {
         if let Some((dir, every)) = options.obj
             && frame.index % every.max(1) == 0
@@ -199,15 +179,23 @@ pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSum
     Ok(summary)
 }
 
-/// A progress bar over `frames` frames, labelled `what`; hidden when `quiet`.
-pub fn frames_bar(what: &str, frames: usize, quiet: bool) -> Result<ProgressBar> {
-    let template = format!("{what} [{{bar:30}}] {{pos}}/{{len}} frames ({{per_sec}}, eta {{eta}})");
-    let bar = ProgressBar::new(frames as u64)
-        .with_style(ProgressStyle::with_template(&template)?.progress_chars("=> "));
+/// A progress bar of `len` items: `what [====>   ] pos/len UNIT (rest)`, where `rest` is an
+/// indicatif template (`{per_sec}`, `{eta}`, `{msg}`, ...); hidden when `quiet`.
+pub fn progress(what: &str, len: usize, unit: &str, rest: &str, quiet: bool) -> ProgressBar {
+    let template = format!("{what} [{{bar:30}}] {{pos}}/{{len}} {unit} {rest}");
+    let style = ProgressStyle::with_template(&template)
+        .expect("the commands' templates are valid")
+        .progress_chars("=> ");
+    let bar = ProgressBar::new(len as u64).with_style(style);
     if quiet {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    Ok(bar)
+    bar
+}
+
+/// A progress bar over `frames` frames, labelled `what`; hidden when `quiet`.
+pub fn frames_bar(what: &str, frames: usize, quiet: bool) -> ProgressBar {
+    progress(what, frames, "frames", "({per_sec}, eta {eta})", quiet)
 }
 
 /// A progress bar for a GIF being drawn, shown from its first frame and cleared after its
@@ -215,14 +203,7 @@ pub fn frames_bar(what: &str, frames: usize, quiet: bool) -> Result<ProgressBar>
 pub fn gif_progress() -> impl FnMut(usize, usize) {
     let mut bar: Option<ProgressBar> = None;
     move |done, total| {
-        let bar = bar.get_or_insert_with(|| {
-            let style = ProgressStyle::with_template(
-                "gif [{bar:30}] {pos}/{len} frames ({per_sec}, eta {eta})",
-            )
-            .expect("a valid template")
-            .progress_chars("=> ");
-            ProgressBar::new(total as u64).with_style(style)
-        });
+        let bar = bar.get_or_insert_with(|| frames_bar("gif", total, false));
         bar.set_position(done as u64);
         if done == total {
             bar.finish_and_clear();
@@ -230,17 +211,10 @@ pub fn gif_progress() -> impl FnMut(usize, usize) {
     }
 }
 
-/// The machine-readable summary (keys checked by scripts).
+/// The machine-readable summary (keys checked by scripts): the run's numbers and where it
+/// was recorded.
 pub fn summary_json(s: &RunSummary, out: &Path) -> serde_json::Value {
-    json!({
-        "frames": s.frames, "finite": s.finite, "wall_s": s.wall_s, "frames_per_s": s.frames_per_s,
-        "max_penetration_m": s.max_penetration_m, "max_verts_inside": s.max_verts_inside,
-        "max_penetration_overlap_m": s.max_penetration_overlap_m,
-        "max_verts_inside_overlap": s.max_verts_inside_overlap,
-        "max_edge_stretch": s.max_edge_stretch, "max_self_intersections": s.max_self_intersections,
-        "vertices": s.vertices,
-        "mean_iterations": s.mean_iterations, "deep_contacts": s.deep_contacts,
-        "retried_frames": s.retried_frames, "stages_s": s.stages, "posing_s": s.posing_s,
-        "recording": out,
-    })
+    let mut summary = serde_json::to_value(s).expect("a run summary serializes");
+    summary["recording"] = json!(out);
+    summary
 }

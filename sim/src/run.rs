@@ -44,6 +44,18 @@ impl Prepared {
         })
     }
 
+    /// The scene `config` names, everything loaded ([`crate::sources`]): its body model, its
+    /// garment (a library design's template made on first use in `cache`, `making` called with
+    /// its path first) and its motion.
+    pub fn load(config: SceneConfig, cache: &Path, making: impl FnOnce(&Path)) -> Result<Self> {
+        let model = Arc::new(crate::sources::body_model(
+            config.model.as_deref().map(Path::new),
+        )?);
+        let (garment, attachments) =
+            crate::sources::garment(&config.garment, &model, cache, making)?;
+        Self::with_motion_of(model, Arc::new(garment), attachments, config)
+    }
+
     /// The scene of `config` on a loaded model and template, its motion loaded by the
     /// configuration's `motion` key ([`crate::sources::motion`]) for its shape.
     pub fn with_motion_of(

@@ -226,6 +226,7 @@ pub struct RunSummary {
     /// Frames that needed smaller steps.
     pub retried_frames: usize,
     /// Where the time went, s per stage.
+    #[serde(rename = "stages_s")]
     pub stages: StageTimes,
     /// Time spent posing the body (forward pass), s.
     pub posing_s: f64,

@@ -4,13 +4,13 @@
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use sim::dataset::{DatasetDir, ManifestRecord, load, stats};
 use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
 use crate::cli::DatasetCommand;
 use crate::output::write_json;
+use crate::run::progress;
 
 pub fn run(command: DatasetCommand) -> Result<()> {
     match command {
@@ -72,13 +72,7 @@ fn tensors(
     let records: Vec<ManifestRecord> =
         files::read_json_lines(&DatasetDir::new(dir).manifest(), "dataset manifest")?;
     let total = records.iter().filter(|r| r.ok()).count();
-    let bar = ProgressBar::new(total as u64).with_style(
-        ProgressStyle::with_template("tensors [{bar:30}] {pos}/{len} sequences (eta {eta})")?
-            .progress_chars("=> "),
-    );
-    if quiet {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
+    let bar = progress("tensors", total, "sequences", "(eta {eta})", quiet);
     let started = std::time::Instant::now();
     let manifest = write_tensors(dir, out, &model, options, || bar.inc(1))
         .with_context(|| format!("making tensors of {}", dir.display()))?;

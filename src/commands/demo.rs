@@ -133,7 +133,7 @@ fn predict_and_compare(
         body_vertices: false,
         software: &software,
     };
-    let bar = frames_bar("predicting", prepared.scene.num_frames(), false)?;
+    let bar = frames_bar("predicting", prepared.scene.num_frames(), false);
     let p = predict_scene(prepared, &request, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     let truth = out.join("sequence.mcap");

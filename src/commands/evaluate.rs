@@ -6,7 +6,6 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 use sim::dataset::{DatasetDir, ManifestRecord};
@@ -19,7 +18,7 @@ use surrogate::run::TrainedModel;
 
 use crate::cli::EvaluateArgs;
 use crate::output::write_json;
-use crate::run::set_threads;
+use crate::run::{progress, set_threads};
 use surrogate::evaluate::report::{self, Pictures};
 
 pub fn run(args: &EvaluateArgs) -> Result<()> {
@@ -102,15 +101,8 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         fingerprint,
     };
     let cache = args.report.as_ref().map(|r| r.join("sequences"));
-    let bar = ProgressBar::new(records.len() as u64).with_style(
-        ProgressStyle::with_template(
-            "evaluating [{bar:30}] {pos}/{len} sequences ({elapsed}, eta {eta}) {msg}",
-        )?
-        .progress_chars("=> "),
-    );
-    if args.quiet {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
+    let rest = "({elapsed}, eta {eta}) {msg}";
+    let bar = progress("evaluating", records.len(), "sequences", rest, args.quiet);
     let started = Instant::now();
     let results = records
         .par_iter()

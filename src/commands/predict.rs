@@ -55,7 +55,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         body_vertices: args.body_vertices,
         software: &software,
     };
-    let bar = frames_bar("predicting", prepared.scene.num_frames(), args.quiet)?;
+    let bar = frames_bar("predicting", prepared.scene.num_frames(), args.quiet);
     let p = predict_scene(&prepared, &request, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     let (garment, scene) = (&prepared.garment, &prepared.scene);

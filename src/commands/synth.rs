@@ -13,7 +13,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::json;
 use sim::dataset::{
@@ -23,6 +22,7 @@ use sim::dataset::{
 
 use crate::cli::SynthArgs;
 use crate::output::write_json;
+use crate::run::progress;
 
 /// The tiny example spec (4 sequences of 30 frames).
 pub const TINY_SPEC: &str = include_str!("../../specs/tiny.toml");
@@ -200,13 +200,13 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs.max(1))
         .build()?;
-    let bar = ProgressBar::new(todo.len() as u64).with_style(
-        ProgressStyle::with_template("synth [{bar:30}] {pos}/{len} sequences ({msg}, eta {eta})")?
-            .progress_chars("=> "),
+    let bar = progress(
+        "synth",
+        todo.len(),
+        "sequences",
+        "({msg}, eta {eta})",
+        args.quiet,
     );
-    if args.quiet {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
     let started = Instant::now();
     let frames_done = AtomicUsize::new(0);
     let failed = AtomicUsize::new(0);

@@ -2,14 +2,13 @@
 //! samples/s, ETA), resumable from its checkpoints.
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use surrogate::burn::prelude::Device;
 use surrogate::data::TrainingTensors;
 use surrogate::run::RunConfig;
 use surrogate::train::{Event, TrainOptions, train};
 
 use crate::cli::TrainArgs;
-use crate::run::set_threads;
+use crate::run::{progress, set_threads};
 
 /// The configuration the flags ask for: the defaults (or, resuming, the run's own
 /// `config.toml`), then `--config`, then `--steps`, `--batch`, `--seed`.
@@ -59,13 +58,8 @@ pub fn run(args: &TrainArgs) -> Result<()> {
         resume: args.resume,
         device: Device::flex(),
     };
-    let bar = ProgressBar::new(options.config.training.steps as u64).with_style(
-        ProgressStyle::with_template("training [{bar:30}] {pos}/{len} steps, {msg} (eta {eta})")?
-            .progress_chars("=> "),
-    );
-    if args.quiet {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
+    let steps = options.config.training.steps;
+    let bar = progress("training", steps, "steps,", "{msg} (eta {eta})", args.quiet);
     let mut samples_per_s = 0.0;
     let mut last_val = None;
     let summary = train(&options, &mut |event| match event {

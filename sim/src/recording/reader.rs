@@ -39,6 +39,25 @@ pub struct RecordedBody {
 }
 
 impl Recording {
+    /// The scene configuration the recording at `path` was simulated from, to simulate or
+    /// predict it again (`--config-from`); refused for a recording without one (a predicted
+    /// sequence, or one made before configurations were recorded).
+    pub fn scene_config(path: &Path) -> Result<SceneConfig> {
+        let fail = |message: &str| Error::Recording {
+            path: path.display().to_string(),
+            message: message.to_string(),
+        };
+        let meta = Self::read(path)?
+            .meta
+            .ok_or_else(|| fail("the recording has no metadata"))?;
+        meta.config.ok_or_else(|| {
+            fail(
+                "the recording carries no scene configuration (made by an older version, or a \
+                 predicted sequence); pass the scene's flags or a --config file instead",
+            )
+        })
+    }
+
     /// The body of frame `k`: the recorded vertices if the recording has them, else `model`
     /// posed with the frame's recorded pose, translation and shape. The triangles (recorded,
     /// else the model's) are checked against the vertex count, so a wrong body model is
