@@ -187,6 +187,9 @@ pub enum Error {
         /// What is missing.
         message: String,
     },
+    /// The shard asked for (flag or job-array variables) is malformed or out of range.
+    #[error("{0}")]
+    Shard(String),
     /// A dataset spec is unreadable or invalid.
     #[error("dataset spec {path}: {message}")]
     Spec {

@@ -8,6 +8,7 @@
 //! recording matches the record's checksum.
 
 use std::collections::HashMap;
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -16,8 +17,8 @@ use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use serde_json::json;
 use sim::dataset::{
-    DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence, Synthesis, expand_motions,
-    finished_record, plan,
+    DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence, Shard, Synthesis, expand_motions,
+    finished_record, make_templates, plan,
 };
 
 use crate::cli::SynthArgs;
@@ -28,50 +29,6 @@ use crate::run::progress;
 pub const TINY_SPEC: &str = include_str!("../../specs/tiny.toml");
 /// The paper-like example spec on the built-in library.
 pub const PAPER_SPEC: &str = include_str!("../../specs/paper.toml");
-
-/// This task's shard (K, N): `--shard K/N`, else a Slurm job array, else a Kubernetes indexed
-/// job (with `--shard-count`), else the whole dataset.
-fn shard(args: &SynthArgs) -> Result<(usize, usize)> {
-    let env = |name: &str| -> Result<Option<usize>> {
-        match std::env::var(name) {
-            Ok(v) => Ok(Some(v.trim().parse().with_context(|| {
-                format!("environment variable {name}='{v}' is not a number")
-            })?)),
-            Err(_) => Ok(None),
-        }
-    };
-    let (k, n) = if let Some(s) = &args.shard {
-        let (k, n) = s
-            .split_once('/')
-            .with_context(|| format!("--shard '{s}' must be K/N, e.g. 0/4"))?;
-        let parse = |v: &str| {
-            v.trim()
-                .parse::<usize>()
-                .with_context(|| format!("--shard '{s}' must be K/N with whole numbers"))
-        };
-        (parse(k)?, parse(n)?)
-    } else if let Some(id) = env("SLURM_ARRAY_TASK_ID")? {
-        let count = env("SLURM_ARRAY_TASK_COUNT")?
-            .context("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")?;
-        let min = env("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
-        (
-            id.checked_sub(min)
-                .context("SLURM_ARRAY_TASK_ID < SLURM_ARRAY_TASK_MIN")?,
-            count,
-        )
-    } else if let Some(index) = env("JOB_COMPLETION_INDEX")? {
-        let count = args
-            .shard_count
-            .context("JOB_COMPLETION_INDEX is set: pass the job's completions as --shard-count")?;
-        (index, count)
-    } else {
-        (0, 1)
-    };
-    if n == 0 || k >= n {
-        bail!("shard {k}/{n} is out of range (K must be below N)");
-    }
-    Ok((k, n))
-}
 
 pub fn run(args: &SynthArgs) -> Result<()> {
     let max = crate::run::MAX_THREADS;
@@ -93,7 +50,10 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         bail!("synth needs --spec FILE and --out DIR (or --example-spec tiny|paper)");
     };
     let spec = DatasetSpec::load(spec_path)?;
-    let (k, n) = shard(args)?;
+    let shard = Shard::resolve(args.shard.as_deref(), args.shard_count, |name| {
+        std::env::var(name).ok()
+    })?;
+    let (k, n) = (shard.index, shard.count);
     let motions = expand_motions(&spec).with_context(|| format!("{}", spec_path.display()))?;
     let planned = plan(&spec, &motions).with_context(|| format!("{}", spec_path.display()))?;
     let dir = DatasetDir::new(out);
@@ -106,45 +66,16 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         sim::sources::motion(source, &model, &neutral)
             .with_context(|| format!("{}: motion '{source}'", spec_path.display()))?;
     }
-    let mine: Vec<&PlannedSequence> = planned
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| i % n == k)
-        .map(|(_, p)| p)
-        .collect();
-    // The templates of this shard's garments, made (or read from the cache) in parallel.
-    let mut names: Vec<&String> = mine.iter().map(|p| &p.garment).collect();
-    names.sort();
-    names.dedup();
-    // A template that fails its gates (a drawn design can) makes its sequences fail, not the
-    // run; any other problem with a garment stops the run before the folder is touched.
-    let made = names
-        .par_iter()
-        .map(|name| {
-            let template = crate::inputs::garment(name, &model);
-            match template {
-                Ok((garment, attachments)) => {
-                    Ok(((*name).clone(), Ok((Arc::new(garment), attachments))))
-                }
-                Err(e @ sim::Error::TemplateGates { .. }) => {
-                    Ok(((*name).clone(), Err(e.to_string())))
-                }
-                Err(e) => Err(anyhow::Error::from(e).context(spec_path.display().to_string())),
-            }
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let mut templates = HashMap::new();
-    let mut unusable = HashMap::new();
-    for (name, template) in made {
-        match template {
-            Ok(t) => {
-                templates.insert(name, t);
-            }
-            Err(why) => {
-                eprintln!("  {why}: its sequences are recorded as failed");
-                unusable.insert(name, why);
-            }
-        }
+    let mine = shard.take(&planned);
+    // The templates of this shard's garments, made (or read from the cache) in parallel: one
+    // that fails its gates makes its sequences fail; any other problem with a garment stops
+    // the run before the folder is touched.
+    let cache = sim::templates::cache_dir();
+    let making = |name: &str, path: &Path| crate::inputs::making_template(name)(path);
+    let (templates, unusable) = make_templates(&mine, &model, &cache, &making)
+        .with_context(|| spec_path.display().to_string())?;
+    for why in unusable.values() {
+        eprintln!("  {why}: its sequences are recorded as failed");
     }
     std::fs::create_dir_all(&dir.root)
         .with_context(|| format!("cannot create {}", dir.root.display()))?;

@@ -11,6 +11,7 @@ mod dir;
 mod manifest;
 mod merge;
 mod plan;
+mod shard;
 mod spec;
 mod synth;
 mod verify;
@@ -19,9 +20,10 @@ pub use dir::{DatasetDir, finished_record};
 pub use manifest::{Attempt, GateResult, ManifestRecord, stats};
 pub use merge::merge;
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};
+pub use shard::Shard;
 pub use spec::{
     DatasetSpec, GarmentEntry, GateSpec, MaterialRanges, MotionEntry, SequenceSpec, SolverSpec,
     SplitSpec, Tag,
 };
-pub use synth::{Synthesis, Template};
+pub use synth::{Synthesis, Template, make_templates};
 pub use verify::{Verification, load, verify};

@@ -5,10 +5,12 @@
 //! it shows progress are the caller's.
 
 use std::collections::HashMap;
+use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use motions::BodyModel;
+use rayon::prelude::*;
 
 use super::{
     Attempt, DatasetDir, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, finished_record,
@@ -20,6 +22,43 @@ use crate::{SceneConfig, SolverParams};
 
 /// A garment template with its body attachments, shared by every sequence that uses it.
 pub type Template = (Arc<garments::Garment>, Vec<BodyAttachment>);
+
+/// The templates of the garments `planned` uses, made (or read from `cache`) in parallel,
+/// `making(name, path)` told before one is made. A template that fails its gates (a drawn
+/// design can) comes back among the unusable with why, so its sequences fail rather than the
+/// run; any other problem with a garment is an error.
+pub fn make_templates(
+    planned: &[&PlannedSequence],
+    model: &BodyModel,
+    cache: &Path,
+    making: &(dyn Fn(&str, &Path) + Sync),
+) -> Result<(HashMap<String, Template>, HashMap<String, String>)> {
+    let mut names: Vec<&str> = planned.iter().map(|p| p.garment.as_str()).collect();
+    names.sort();
+    names.dedup();
+    let made = names
+        .par_iter()
+        .map(
+            |&name| match crate::sources::garment(name, model, cache, |path| making(name, path)) {
+                Ok((garment, attachments)) => Ok((name, Ok((Arc::new(garment), attachments)))),
+                Err(e @ Error::TemplateGates { .. }) => Ok((name, Err(e.to_string()))),
+                Err(e) => Err(e),
+            },
+        )
+        .collect::<Result<Vec<_>>>()?;
+    let (mut templates, mut unusable) = (HashMap::new(), HashMap::new());
+    for (name, template) in made {
+        match template {
+            Ok(t) => {
+                templates.insert(name.to_string(), t);
+            }
+            Err(why) => {
+                unusable.insert(name.to_string(), why);
+            }
+        }
+    }
+    Ok((templates, unusable))
+}
 
 /// What every sequence of a run shares.
 pub struct Synthesis<'a> {
@@ -361,6 +400,28 @@ split = "train"
         assert!(!dir.manifest().exists());
         assert_eq!(dir.write_manifest(&both[..1], &known).unwrap(), 0);
         assert!(dir.manifest().exists());
+    }
+
+    /// The built-in skirt is made without a notice (it is not cached); an unknown garment
+    /// stops the run, naming it.
+    #[test]
+    fn templates_are_made_once_per_garment_and_unknown_ones_refused() {
+        let spec = DatasetSpec::parse(SPEC, std::path::Path::new("unit.toml")).unwrap();
+        let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
+        let cache = tempfile::tempdir().unwrap();
+        let model = BodyModel::default_body();
+        let told = std::sync::Mutex::new(Vec::new());
+        let making = |name: &str, _: &Path| told.lock().unwrap().push(name.to_string());
+        let both: Vec<&PlannedSequence> = vec![&planned[0], &planned[0]];
+        let (made, unusable) = make_templates(&both, &model, cache.path(), &making).unwrap();
+        assert_eq!(made.keys().collect::<Vec<_>>(), ["skirt"]);
+        assert!(unusable.is_empty() && told.lock().unwrap().is_empty());
+        let unknown = PlannedSequence {
+            garment: "no_such_design".into(),
+            ..planned[0].clone()
+        };
+        let e = make_templates(&[&unknown], &model, cache.path(), &making).unwrap_err();
+        assert!(e.to_string().contains("no_such_design"), "{e}");
     }
 
     /// A folder keeps its spec: the same spec passes, another is refused; leftovers of the
