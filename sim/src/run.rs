@@ -78,12 +78,7 @@ impl Prepared {
         deadline: Option<Instant>,
         each_frame: impl FnMut(&FrameOutput) -> Result<()>,
     ) -> Result<RunSummary> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::Recording {
-                path: path.display().to_string(),
-                message: format!("cannot create its folder: {e}"),
-            })?;
-        }
+        crate::recording::create_folder_of(path)?;
         let mut summary = None;
         files::write_fallible(path, |w| {
             summary = Some(self.record(w, software, deadline, each_frame)?);

@@ -2,12 +2,12 @@
 
 use anyhow::Result;
 use motions::library::{MOTIONS, MotionSpec};
-use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES, Motion, NUM_JOINTS, canonical_a_pose};
+use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES, Motion, NUM_JOINTS};
 use serde_json::json;
-use sim::recording::{BodySequenceMeta, Channels, FrameRecord, SequenceWriter, UNITS};
+use sim::recording::write_body_sequence;
 
 use crate::cli::MotionsCommand;
-use crate::output::{write_atomic, write_json};
+use crate::output::write_json;
 
 pub fn run(command: MotionsCommand) -> Result<()> {
     match command {
@@ -36,56 +36,18 @@ pub fn run(command: MotionsCommand) -> Result<()> {
                 );
             }
             let model = sim::sources::body_model(model.body_model.as_deref())?;
-            let shaped = model.shape(&betas)?;
-            let mut m = sim::sources::motion(&motion, &model, &shaped)?;
-            if blend_frames + settle_frames > 0 {
-                m = m.with_blend_in(
-                    &canonical_a_pose(),
-                    BlendIn {
-                        blend_frames,
-                        settle_frames,
-                    },
-                );
-            }
-            let posed = model.pose_batch(&shaped, &m.frames)?;
-            let meta = BodySequenceMeta {
-                software: format!("dit-garment {}", env!("CARGO_PKG_VERSION")),
-                motion: m.name.clone(),
-                body_model: model.name().to_string(),
-                betas: shaped.betas.clone(),
-                fps: m.fps,
-                frames: m.len(),
+            let motion = sim::sources::motion(&motion, &model, &model.shape(&betas)?)?;
+            let blend = BlendIn {
                 blend_frames,
                 settle_frames,
-                units: UNITS.to_string(),
             };
-            write_atomic(&out, |w| {
-                let channels = Channels {
-                    body_faces: Some(model.faces()),
-                    joints: true,
-                    ..Channels::default()
-                };
-                let mut writer = SequenceWriter::new(w, &meta, channels, m.fps)?;
-                for (index, (frame, body)) in m.frames.iter().zip(&posed).enumerate() {
-                    writer.write_frame(&FrameRecord {
-                        index,
-                        garment: None,
-                        pose: &frame.pose,
-                        transl: frame.transl,
-                        betas: &shaped.betas,
-                        body_vertices: Some(&body.vertices),
-                        joints: Some(&body.joints),
-                        stats: None,
-                    })?;
-                }
-                writer.finish()?;
-                Ok(())
-            })?;
+            let software = format!("dit-garment {}", env!("CARGO_PKG_VERSION"));
+            let m = write_body_sequence(&out, &model, &betas, &motion, blend, &software)?;
             let bytes = std::fs::metadata(&out)?.len();
             println!(
                 "wrote {} ({} frames at {} fps, {} vertices, {:.1} MB)",
                 out.display(),
-                m.len(),
+                m.frames,
                 m.fps,
                 model.num_vertices(),
                 bytes as f64 / 1e6
@@ -93,7 +55,7 @@ pub fn run(command: MotionsCommand) -> Result<()> {
             if let Some(path) = json {
                 write_json(
                     &path,
-                    &json!({"frames": m.len(), "fps": m.fps, "vertices": model.num_vertices(), "bytes": bytes, "file": out}),
+                    &json!({"frames": m.frames, "fps": m.fps, "vertices": model.num_vertices(), "bytes": bytes, "file": out}),
                 )?;
             }
             Ok(())

@@ -4,12 +4,14 @@
 //! ([`Recording`]). Raw arrays are little-endian with `dtype` and `shape` in the channel
 //! metadata, so the Python `mcap` package and Foxglove read them without our code.
 
+mod body_sequence;
 mod foxglove;
 mod mcap_read;
 mod reader;
 mod stats;
 mod writer;
 
+pub use body_sequence::write_body_sequence;
 pub use reader::{RecordedBody, Recording};
 pub use stats::FrameStats;
 pub use writer::{Channels, FrameRecord, SequenceWriter};
@@ -18,6 +20,17 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::SceneConfig;
 use crate::params::{Material, SolverParams};
+
+/// Makes the folder a recording at `path` goes into, if missing.
+pub(crate) fn create_folder_of(path: &std::path::Path) -> crate::Result<()> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| crate::Error::Recording {
+            path: path.display().to_string(),
+            message: format!("cannot create its folder: {e}"),
+        }),
+        None => Ok(()),
+    }
+}
 
 /// Topic of the sequence metadata (JSON, once at time 0).
 pub const META_TOPIC: &str = "/sequence/meta";
