@@ -23,7 +23,7 @@ pub use colour::{ColourScale, draw_colour_bar, draw_text};
 pub use image::RgbImage;
 pub use raster::{Layer, Renderer, Style};
 pub use sheet::{GifWriter, contact_sheet, write_png};
-pub use texels::texel_picture;
+pub use texels::{magnitude_picture, texel_picture, vector_picture};
 
 /// A point or vector, world units (metres in this project).
 pub type P3 = [f32; 3];

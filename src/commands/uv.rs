@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use render::{ColourScale, RgbImage, contact_sheet, draw_colour_bar, texel_picture};
+use render::{ColourScale, contact_sheet, magnitude_picture, texel_picture, vector_picture};
 use serde_json::json;
 use sim::recording::TemplateArrays;
 use surrogate::data::{Sequence, roundtrip_floor};
@@ -21,56 +21,6 @@ const PICTURE_PIXELS: u32 = 384;
 
 /// Target maps drawn for a recording.
 const TARGET_PICTURES: usize = 4;
-
-/// Physical size of a texel, cm: the square root of the template's 3D area over its UV area,
-/// over the resolution.
-fn texel_cm(t: &TemplateArrays, resolution: usize) -> f64 {
-    let area3 = |tri: &[u32; 3]| {
-        let [a, b, c] = tri.map(|i| nalgebra::Vector3::from(t.positions[i as usize]));
-        0.5 * (b - a).cross(&(c - a)).norm()
-    };
-    let area2 = |tri: &[u32; 3]| {
-        let [a, b, c] = tri.map(|i| t.uvs[i as usize]);
-        0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs()
-    };
-    let surface: f64 = t.triangles.iter().map(area3).sum();
-    let uv: f64 = t.uv_triangles.iter().map(area2).sum();
-    100.0 * (surface / uv.max(1e-12)).sqrt() / resolution as f64
-}
-
-/// Per-channel colours of a vector image over the texels of `mask` (the others dimmed).
-fn vector_picture(image: &[[f64; 3]], mask: &[bool], resolution: usize) -> RgbImage {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for (v, _) in image.iter().zip(mask).filter(|(_, m)| **m) {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
-        }
-    }
-    let pixels = PICTURE_PIXELS / resolution as u32;
-    texel_picture(resolution, pixels, |t| {
-        let dim = if mask[t] { 1.0 } else { 0.35 };
-        std::array::from_fn(|k| {
-            let span = (hi[k] - lo[k]).max(1e-12);
-            (255.0 * dim * ((image[t][k] - lo[k]) / span).clamp(0.0, 1.0)) as u8
-        })
-    })
-}
-
-/// Target magnitude (cm) on the viridis scale with a colour bar; outside texels grey.
-fn magnitude_picture(image: &[[f64; 3]], mask: &[bool], r: usize, scale: ColourScale) -> RgbImage {
-    let mut picture = texel_picture(r, PICTURE_PIXELS / r as u32, |t| {
-        if !mask[t] {
-            return [200, 200, 200];
-        }
-        let v = image[t];
-        let cm = 100.0 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        scale.colour(cm as f32)
-    });
-    draw_colour_bar(&mut picture, &scale, "cm");
-    picture
-}
 
 pub fn run(args: &UvArgs) -> Result<()> {
     let kind = TargetKind::parse(&args.target).context("unknown --target")?;
@@ -103,7 +53,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
     let position = image.encode(&template.positions)?;
     let inside = atlas.inside().to_vec();
     tiles.push((
-        vector_picture(&position, &inside, r),
+        vector_picture(&position, &inside, r, PICTURE_PIXELS / r as u32),
         "position map".to_string(),
     ));
     let loss_mask = image.loss_mask();
@@ -117,7 +67,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
     tiles.push((mask, "mask (grey: read back)".to_string()));
     let mut summary = json!({
         "source": args.source, "resolution": r, "coverage": atlas.coverage(),
-        "texel_cm": texel_cm(&template, r), "vertices": template.positions.len(),
+        "texel_cm": GeometryImage::texel_cm(&template, r), "vertices": template.positions.len(),
         "uv_corners": template.uvs.len(), "charts": atlas.charts(),
         "root": args.root,
     });
@@ -142,7 +92,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
             let target = targets.encode(&model, sequence.body(k), &sequence.garment[k])?;
             let map = image.encode(&target)?;
             tiles.push((
-                magnitude_picture(&map, &inside, r, scale),
+                magnitude_picture(&map, &inside, r, PICTURE_PIXELS / r as u32, scale),
                 format!("{} frame {k}", kind.name()),
             ));
         }

@@ -140,6 +140,23 @@ impl GeometryImage {
         )
     }
 
+    /// The physical size of a texel of `template` at `resolution`, cm: the square root of
+    /// its 3D area over its UV area, over the resolution.
+    pub fn texel_cm(template: &TemplateArrays, resolution: usize) -> f64 {
+        let t = template;
+        let area3 = |tri: &[u32; 3]| {
+            let [a, b, c] = tri.map(|i| nalgebra::Vector3::from(t.positions[i as usize]));
+            0.5 * (b - a).cross(&(c - a)).norm()
+        };
+        let area2 = |tri: &[u32; 3]| {
+            let [a, b, c] = tri.map(|i| t.uvs[i as usize]);
+            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs()
+        };
+        let surface: f64 = t.triangles.iter().map(area3).sum();
+        let uv: f64 = t.uv_triangles.iter().map(area2).sum();
+        100.0 * (surface / uv.max(1e-12)).sqrt() / resolution as f64
+    }
+
     /// The atlas.
     pub fn atlas(&self) -> &Atlas {
         &self.atlas
