@@ -11,8 +11,8 @@ use serde_json::{Value, json};
 use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
-use surrogate::evaluate::tables::{SequenceResult, SplitRows, aggregate, paper_numbers};
-use surrogate::evaluate::{Evaluation, select, units};
+use surrogate::evaluate::tables::{SequenceResult, aggregate, text_table};
+use surrogate::evaluate::{Evaluation, describe_model, document, fingerprint, select};
 use surrogate::predict::{Predictor, Settings};
 use surrogate::run::TrainedModel;
 
@@ -66,32 +66,14 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let all: Vec<ManifestRecord> = files::read_json_lines(&manifest, "dataset manifest")
         .with_context(|| format!("reading the dataset in {}", args.data.display()))?;
     let records = select(&all, &args.splits, args.max_sequences, &manifest)?;
-    let weights = trained
-        .as_ref()
-        .map(|t| files::sha256_file(&t.run.join("model.safetensors")))
-        .transpose()?
-        .map(|(sha, _)| sha);
-    let model_json = match &trained {
-        Some(t) => json!({
-            "run": t.run, "weights_sha256": weights, "target": t.data.target.name(),
-            "resolution": t.data.resolution, "config": t.config,
-            "trained_on": t.data.templates.iter().filter(|t| t.in_training()).map(|t| &t.name).collect::<Vec<_>>(),
-        }),
-        None => Value::Null,
+    let (model_json, identity) = match &trained {
+        Some(t) => {
+            let (described, identity) = describe_model(t)?;
+            (described, Some(identity))
+        }
+        None => (Value::Null, None),
     };
-    // What makes the predictions: the weights and their config, not the folder they are in.
-    let identity = trained.as_ref().map(|t| {
-        json!({"weights_sha256": weights, "target": t.data.target.name(),
-               "resolution": t.data.resolution, "config": t.config})
-    });
-    let fingerprint = json!({
-        "model": identity, "steps": settings.steps, "guidance": settings.guidance,
-        "seed": settings.seed, "batch": settings.batch, "draws": settings.draws,
-        "baselines": baselines.iter().map(|(m, _)| m.name()).collect::<Vec<_>>(),
-        "floor": {"resolution": floor.resolution, "target": floor.target.name()},
-        "body_model": body.name(), "threads": rayon::current_num_threads(),
-        "software": env!("CARGO_PKG_VERSION"),
-    });
+    let fingerprint = fingerprint(identity.as_ref(), &settings, &baselines, floor, &body);
     let evaluation = Evaluation {
         data: &args.data,
         body: &body,
@@ -128,23 +110,9 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     bar.finish_and_clear();
     let reused = results.iter().filter(|(_, hit)| *hit).count();
     let results: Vec<SequenceResult> = results.into_iter().map(|(r, _)| r).collect();
-    let (splits, simulation) = aggregate(&results);
-    let settings_json = json!({
-        "steps": settings.steps, "guidance": settings.guidance.weight,
-        "guidance_start": settings.guidance.start, "seed": settings.seed,
-        "batch": settings.batch, "draws": settings.draws, "threads": rayon::current_num_threads(),
-        "splits": args.splits, "max_sequences": args.max_sequences,
-        "data": args.data, "protocol": "motion frames (after blend-in and settle); every 5th scored, averaged over frames then sequences; jitter over all motion frames",
-    });
-    let output = json!({
-        "splits": splits,
-        "simulation": simulation,
-        "sequences": results,
-        "model": model_json,
-        "settings": settings_json,
-        "units": units(),
-        "paper": paper_numbers(),
-    });
+    let asked =
+        json!({"splits": args.splits, "max_sequences": args.max_sequences, "data": args.data});
+    let output = document(&results, model_json, &settings, asked);
     if let Some(path) = &args.json {
         write_json(path, &output)?;
     }
@@ -158,6 +126,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         report::write(dir, &output, &results, &pictures)
             .with_context(|| format!("writing the report in {}", dir.display()))?;
     }
+    let (splits, _) = aggregate(&results);
     println!(
         "evaluate: {} sequences of {} splits in {:.1} s ({} reused from the cache)",
         results.len(),
@@ -165,29 +134,6 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         started.elapsed().as_secs_f64(),
         reused
     );
-    print_table(&splits);
+    print!("{}", text_table(&splits));
     Ok(())
-}
-
-/// Prints the short table of `evaluate`.
-pub fn print_table(splits: &SplitRows) {
-    println!(
-        "{:<14} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}",
-        "split", "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
-    );
-    for (s, methods) in splits {
-        for (m, r) in methods {
-            println!(
-                "{:<14} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}",
-                s,
-                m.name(),
-                r.scores.E_v,
-                r.scores.E_c,
-                r.inside_percent,
-                r.stretch_p99,
-                r.jitter,
-                r.fps
-            );
-        }
-    }
 }

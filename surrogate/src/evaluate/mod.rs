@@ -13,7 +13,7 @@ mod protocol;
 pub mod report;
 pub mod tables;
 
-pub use protocol::{Evaluation, select};
+pub use protocol::{Evaluation, describe_model, document, fingerprint, select};
 
 use serde::{Deserialize, Serialize};
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer, Scores, jitter};

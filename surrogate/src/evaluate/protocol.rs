@@ -13,11 +13,12 @@ use serde_json::{Value, json};
 use sim::dataset::ManifestRecord;
 
 use super::baselines::{self, Baseline, FloorMaps};
-use super::tables::SequenceResult;
+use super::tables::{SequenceResult, aggregate, paper_numbers};
 use super::{Method, Truth};
 use crate::data::Sequence;
 use crate::error::{Error, Result, file_error};
 use crate::predict::{BodySequence, Guidance, Predictor, Settings};
+use crate::run::TrainedModel;
 
 impl Baseline {
     /// The baseline a name asks for (`lbs`, `lbs_nearest`, `floor` with `floor`'s maps,
@@ -69,6 +70,79 @@ pub fn select(
     }
     Ok(records)
 }
+
+/// What `evaluate` records of a model (`model` in its JSON: the run folder, the weights'
+/// SHA-256, target, resolution, configuration and the templates trained on), and the part of
+/// that which makes its predictions (the weights and their configuration, not the folder they
+/// are in) for the results' [`fingerprint`].
+pub fn describe_model(t: &TrainedModel) -> Result<(Value, Value)> {
+    let (sha, _) = files::sha256_file(&t.run.join("model.safetensors"))?;
+    let identity = json!({"weights_sha256": sha, "target": t.data.target.name(),
+        "resolution": t.data.resolution, "config": t.config});
+    let mut described = identity.clone();
+    described["run"] = json!(t.run);
+    described["trained_on"] = t
+        .data
+        .templates
+        .iter()
+        .filter(|t| t.in_training())
+        .map(|t| json!(t.name))
+        .collect();
+    Ok((described, identity))
+}
+
+/// What makes a sequence's result, so a cached one made otherwise is made again: the model's
+/// identity ([`describe_model`]), the sampler, the baselines and floor maps, the body model,
+/// the thread count and the software version.
+pub fn fingerprint(
+    model: Option<&Value>,
+    settings: &Settings,
+    baselines: &[(Method, Baseline)],
+    floor: FloorMaps,
+    body: &BodyModel,
+) -> Value {
+    json!({
+        "model": model, "steps": settings.steps, "guidance": settings.guidance,
+        "seed": settings.seed, "batch": settings.batch, "draws": settings.draws,
+        "baselines": baselines.iter().map(|(m, _)| m.name()).collect::<Vec<_>>(),
+        "floor": {"resolution": floor.resolution, "target": floor.target.name()},
+        "body_model": body.name(), "threads": rayon::current_num_threads(),
+        "software": env!("CARGO_PKG_VERSION"),
+    })
+}
+
+/// The whole of an evaluation as `evaluate --json` writes it: the rows of every split and the
+/// simulation's ([`aggregate`]), every sequence's result, the model ([`describe_model`]), the
+/// settings (`settings`, to which the sampler's and the protocol are added), the units and
+/// the paper's numbers.
+pub fn document(
+    results: &[SequenceResult],
+    model: Value,
+    sampler: &Settings,
+    mut settings: Value,
+) -> Value {
+    let (splits, simulation) = aggregate(results);
+    for (key, value) in [
+        ("steps", json!(sampler.steps)),
+        ("guidance", json!(sampler.guidance.weight)),
+        ("guidance_start", json!(sampler.guidance.start)),
+        ("seed", json!(sampler.seed)),
+        ("batch", json!(sampler.batch)),
+        ("draws", json!(sampler.draws)),
+        ("threads", json!(rayon::current_num_threads())),
+        ("protocol", json!(PROTOCOL)),
+    ] {
+        settings[key] = value;
+    }
+    json!({
+        "splits": splits, "simulation": simulation, "sequences": results, "model": model,
+        "settings": settings, "units": super::units(), "paper": paper_numbers(),
+    })
+}
+
+/// What is scored, in words (the JSON's `settings.protocol`).
+const PROTOCOL: &str = "motion frames (after blend-in and settle); every 5th scored, averaged \
+                        over frames then sequences; jitter over all motion frames";
 
 /// What scoring a sequence needs.
 pub struct Evaluation<'a> {

@@ -33,6 +33,30 @@ pub struct SequenceResult {
 /// Per split: the mean row of every method.
 pub type SplitRows = BTreeMap<String, BTreeMap<Method, MethodScores>>;
 
+/// The short table `evaluate` prints: one line per split and method.
+pub fn text_table(splits: &SplitRows) -> String {
+    let mut text = format!(
+        "{:<14} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}\n",
+        "split", "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
+    );
+    for (split, methods) in splits {
+        for (m, r) in methods {
+            text += &format!(
+                "{:<14} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}\n",
+                split,
+                m.name(),
+                r.scores.E_v,
+                r.scores.E_c,
+                r.inside_percent,
+                r.stretch_p99,
+                r.jitter,
+                r.fps
+            );
+        }
+    }
+    text
+}
+
 /// The mean rows of every split and method, and the simulation's per split.
 pub fn aggregate(results: &[SequenceResult]) -> (SplitRows, BTreeMap<String, MethodScores>) {
     let mut rows: BTreeMap<String, BTreeMap<Method, Vec<MethodScores>>> = BTreeMap::new();
