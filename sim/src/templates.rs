@@ -82,6 +82,49 @@ pub fn library_template(
     Ok(cached)
 }
 
+/// What `garments make` reports: the sewing's gates and figures, and its timings.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct MadeTemplate {
+    /// The pattern's name.
+    pub name: String,
+    /// The gates and their figures.
+    #[serde(flatten)]
+    pub sewing: crate::sewing::SewingReport,
+    /// The target edge length it was meshed at, m.
+    pub edge_length_m: f64,
+    /// Meshing time, s.
+    pub mesh_s: f64,
+    /// Total time, s.
+    pub wall_s: f64,
+}
+
+/// Meshes `pattern` at `edge_length`, sews and drapes it on the default body and writes the
+/// template to `out` (OBJ, or PLY by its name) whether its gates pass or not; `meshed` is told
+/// the panel and vertex counts before sewing, which takes a while.
+pub fn make_template(
+    pattern: &garments::Pattern,
+    edge_length: f64,
+    out: &Path,
+    meshed: impl FnOnce(usize, usize),
+) -> Result<MadeTemplate> {
+    let started = std::time::Instant::now();
+    let mesh = pattern.mesh(edge_length).map_err(|e| Error::Garment {
+        garment: pattern.name.clone(),
+        problem: e.to_string(),
+    })?;
+    let mesh_s = started.elapsed().as_secs_f64();
+    meshed(mesh.garment.panels.len(), mesh.garment.positions.len());
+    let (template, sewing) = sew(&BodyModel::default_body(), &mesh, &SewingOptions::default())?;
+    write_template(out, &template)?;
+    Ok(MadeTemplate {
+        name: pattern.name.clone(),
+        sewing,
+        edge_length_m: edge_length,
+        mesh_s,
+        wall_s: started.elapsed().as_secs_f64(),
+    })
+}
+
 /// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically (its folder
 /// created if need be).
 pub fn write_template(path: &Path, template: &Garment) -> Result<()> {

@@ -1,13 +1,11 @@
 //! `garments list | show | make | check`.
 
 use std::path::Path;
-use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use garments::Pattern;
 use garments::library::{DESIGNS, resolve};
 use motions::BodyModel;
-use serde::Serialize;
 
 use crate::cli::GarmentsCommand;
 
@@ -19,28 +17,6 @@ macro_rules! say {
     }};
 }
 use crate::output::{write_atomic, write_json};
-
-/// One row of `garments list --json`.
-#[derive(Debug, Serialize)]
-struct DesignRow {
-    name: &'static str,
-    split: &'static str,
-    vertices: usize,
-    triangles: usize,
-    panels: usize,
-    description: &'static str,
-}
-
-/// What `garments make --report` writes.
-#[derive(Debug, Serialize)]
-struct MakeReport {
-    name: String,
-    #[serde(flatten)]
-    sewing: sim::sewing::SewingReport,
-    edge_length_m: f64,
-    mesh_s: f64,
-    wall_s: f64,
-}
 
 /// Runs a `garments` subcommand.
 pub fn run(command: GarmentsCommand) -> Result<()> {
@@ -74,18 +50,7 @@ fn list(json: Option<&Path>) -> Result<()> {
         "panels"
     );
     for d in DESIGNS {
-        let mesh = d
-            .pattern()?
-            .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)?;
-        let merged = mesh.merged(&mesh.garment.positions)?;
-        let row = DesignRow {
-            name: d.name,
-            split: d.split,
-            vertices: merged.positions.len(),
-            triangles: merged.triangles.len(),
-            panels: merged.panels.len(),
-            description: d.description,
-        };
+        let row = d.summary()?;
         say!(
             "{:<24} {:<6} {:>8} {:>6}  {}",
             row.name,
@@ -167,30 +132,15 @@ pub fn load_pattern(source: &str) -> Result<Pattern> {
 }
 
 fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Result<()> {
-    let started = Instant::now();
     let pattern = load_pattern(source)?;
-    let model = BodyModel::default_body();
-    let mesh = pattern
-        .mesh(edge_length)
-        .map_err(|e| anyhow::anyhow!("{source}: {e}"))?;
-    let mesh_s = started.elapsed().as_secs_f64();
-    eprintln!(
-        "{}: {} panels, {} vertices before sewing; sewing and draping ...",
-        pattern.name,
-        mesh.garment.panels.len(),
-        mesh.garment.positions.len()
-    );
-    let (template, sewing) =
-        sim::sewing::sew(&model, &mesh, &sim::sewing::SewingOptions::default())
-            .with_context(|| format!("sewing '{}'", pattern.name))?;
-    sim::templates::write_template(out, &template)?;
-    let made = MakeReport {
-        name: pattern.name.clone(),
-        sewing,
-        edge_length_m: edge_length,
-        mesh_s,
-        wall_s: started.elapsed().as_secs_f64(),
+    let meshed = |panels, vertices| {
+        eprintln!(
+            "{}: {panels} panels, {vertices} vertices before sewing; sewing and draping ...",
+            pattern.name
+        )
     };
+    let made = sim::templates::make_template(&pattern, edge_length, out, meshed)
+        .with_context(|| format!("making the template of '{source}'"))?;
     say!(
         "{}: {} vertices, {} triangles; inside {}, seam gap {:.2} mm, moving {:.1}%, max stretch \
          {:.3}, self-intersections {}; {:.1} s -> {}",
@@ -213,17 +163,6 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
     }
     say!("gates passed");
     Ok(())
-}
-
-#[derive(Debug, Serialize)]
-struct CheckOutput {
-    file: String,
-    usable: bool,
-    vertices: usize,
-    triangles: usize,
-    panels: usize,
-    extent_m: [f64; 3],
-    findings: Vec<String>,
 }
 
 fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
@@ -250,20 +189,7 @@ fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
         );
         return Ok(());
     }
-    let (mut raw, numbers) = garments::read_obj_numbered(file)?;
-    for p in &mut raw.positions {
-        *p = p.map(|c| c * scale);
-    }
-    let report = garments::check_numbered(&raw, Some(&numbers));
-    let out = CheckOutput {
-        file: shown.clone(),
-        usable: report.repairable(),
-        vertices: report.vertices,
-        triangles: report.triangles,
-        panels: report.panels,
-        extent_m: report.extent_m,
-        findings: report.lines(),
-    };
+    let out = garments::check_obj_file(file, scale)?;
     say!(
         "{shown}: {} vertices, {} triangles, {} panels, extent {:.3} x {:.3} x {:.3} m",
         out.vertices,

@@ -94,6 +94,44 @@ impl CheckReport {
     }
 }
 
+/// What `garments check` reports of an OBJ file: the counts and one line per finding.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct FileCheck {
+    /// The file as given.
+    pub file: String,
+    /// Whether the mesh can be used (every finding repairable).
+    pub usable: bool,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Triangle count.
+    pub triangles: usize,
+    /// Panel count.
+    pub panels: usize,
+    /// Bounding-box size, m.
+    pub extent_m: [f64; 3],
+    /// One line per finding ([`CheckReport::lines`]).
+    pub findings: Vec<String>,
+}
+
+/// Checks the OBJ mesh at `path`, its positions scaled by `scale` first (0.01 for cm),
+/// naming vertices by their numbers in the file.
+pub fn check_obj_file(path: &std::path::Path, scale: f64) -> crate::Result<FileCheck> {
+    let (mut raw, numbers) = crate::read_obj_numbered(path)?;
+    for p in &mut raw.positions {
+        *p = p.map(|c| c * scale);
+    }
+    let report = check_numbered(&raw, Some(&numbers));
+    Ok(FileCheck {
+        file: path.display().to_string(),
+        usable: report.repairable(),
+        vertices: report.vertices,
+        triangles: report.triangles,
+        panels: report.panels,
+        extent_m: report.extent_m,
+        findings: report.lines(),
+    })
+}
+
 /// Lists every problem of the mesh (see the module docs).
 pub fn check(g: &Garment) -> CheckReport {
     check_numbered(g, None)
@@ -224,6 +262,26 @@ mod tests {
 
     fn problems(g: &Garment) -> Vec<&'static str> {
         check(g).findings.iter().map(|f| f.problem).collect()
+    }
+
+    /// A tube in cm is refused until scaled to metres; vertices are named by their numbers
+    /// in the file.
+    #[test]
+    fn an_obj_file_is_checked_at_its_scale() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("tube.obj");
+        let mut cm = tube();
+        for p in &mut cm.positions {
+            *p = p.map(|c| c * 100.0);
+        }
+        files::write_with(&path, |w| crate::write_obj(w, &cm, None)).unwrap();
+        let raw = check_obj_file(&path, 1.0).unwrap();
+        assert!(!raw.usable, "{raw:?}");
+        assert!(raw.findings.iter().any(|f| f.contains("extent")), "{raw:?}");
+        let metres = check_obj_file(&path, 0.01).unwrap();
+        assert!(metres.usable && metres.findings.is_empty(), "{metres:?}");
+        assert_eq!(metres.vertices, tube().positions.len());
+        assert!(metres.file.ends_with("tube.obj"));
     }
 
     #[test]

@@ -10,7 +10,9 @@
 
 use serde_json::{Value, json};
 
+mod summary;
 mod variants;
+pub use summary::DesignSummary;
 pub use variants::{MAX_INDEX, NamedDesign, naming, resolve, variant_name};
 
 use crate::error::Result;
