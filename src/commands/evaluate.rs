@@ -39,9 +39,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         inside_test: false,
         ..args.sampler.settings(defaults)
     };
-    if let Err(e) = settings.validate() {
-        bail!("bad sampler settings: {e}");
-    }
+    settings.validate().context("bad sampler settings")?;
     let body = sim::sources::body_model(args.body_model.as_deref())?;
     let predictor = trained
         .as_ref()

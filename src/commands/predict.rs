@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use serde_json::json;
 use surrogate::burn::prelude::Device;
 use surrogate::predict::{Noise, Settings};
@@ -38,9 +38,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         inside_test: true,
         ..args.sampler.settings(Settings::for_model(&trained))
     };
-    if let Err(e) = settings.validate() {
-        bail!("bad sampler settings: {e}");
-    }
+    settings.validate().context("bad sampler settings")?;
     let config = resolve_inputs(&args.scene)?;
     let prepared = prepare(config)?;
     let model_name = trained.run.display().to_string();

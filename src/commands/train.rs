@@ -42,9 +42,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     let tensors = TrainingTensors::open(&args.data)
         .with_context(|| format!("reading the training tensors in {}", args.data.display()))?;
     config.fit_to(&tensors);
-    if let Err(e) = config.validate() {
-        bail!("{e}");
-    }
+    config.validate()?;
     if args.print_config {
         print!("{}", config.to_toml());
         return Ok(());

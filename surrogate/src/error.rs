@@ -11,6 +11,15 @@ pub(crate) fn file_error(path: &std::path::Path, problem: impl std::fmt::Display
     }
 }
 
+/// An [`Error::Value`]: `key = value: expected`.
+pub(crate) fn bad_value(key: &str, value: impl std::fmt::Display, expected: &str) -> Error {
+    Error::Value {
+        key: key.to_string(),
+        value: value.to_string(),
+        expected: expected.to_string(),
+    }
+}
+
 /// Result with [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -97,6 +106,17 @@ pub enum Error {
         path: String,
         /// What is wrong, naming the key.
         message: String,
+    },
+    /// A setting out of range: `key` names it as written (`model.patch`, `training.lr`,
+    /// `steps`, `guidance weight`).
+    #[error("{key} = {value}: {expected}")]
+    Value {
+        /// The key.
+        key: String,
+        /// The value given.
+        value: String,
+        /// What it must be.
+        expected: String,
     },
     /// Training diverged: the loss stopped being a finite number.
     #[error(

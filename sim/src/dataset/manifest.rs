@@ -199,19 +199,36 @@ impl ManifestRecord {
     /// Checks that the id is a plain file name and the recording (if any) is
     /// `sequences/<id>.mcap`, so a damaged or hostile manifest never points a reader (or a
     /// merge's copy) outside the dataset folder.
-    pub fn check_paths(&self) -> std::result::Result<(), String> {
+    pub fn check_paths(&self) -> std::result::Result<(), RecordPathError> {
         let id = &self.id;
         let plain = !id.is_empty() && id != "." && id != ".." && !id.contains(['/', '\\', '\0']);
         if !plain {
-            return Err(format!("sequence id {id:?} is not a plain file name"));
+            return Err(RecordPathError::Id(id.clone()));
         }
         match &self.file {
-            Some(file) if *file != format!("sequences/{id}.mcap") => Err(format!(
-                "sequence {id}: recording {file:?} is not sequences/{id}.mcap"
-            )),
+            Some(file) if *file != format!("sequences/{id}.mcap") => Err(RecordPathError::File {
+                id: id.clone(),
+                file: file.clone(),
+            }),
             _ => Ok(()),
         }
     }
+}
+
+/// Why [`ManifestRecord::check_paths`] refuses a record.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RecordPathError {
+    /// The id is not a plain file name.
+    #[error("sequence id {0:?} is not a plain file name")]
+    Id(String),
+    /// The recording is not `sequences/<id>.mcap`.
+    #[error("sequence {id}: recording {file:?} is not sequences/{id}.mcap")]
+    File {
+        /// The sequence.
+        id: String,
+        /// The recording it names.
+        file: String,
+    },
 }
 
 /// Counts, histograms and totals over manifest records (the `dataset stats` report).

@@ -55,7 +55,8 @@ pub fn merge(out: &Path, roots: &[PathBuf]) -> Result<usize> {
     copy_into(&dirs[0].plan(), &target.plan())?;
     let mut records: Vec<ManifestRecord> = Vec::with_capacity(found.len());
     for (d, r) in found {
-        r.check_paths().map_err(|e| fail(&d.manifest(), e))?;
+        r.check_paths()
+            .map_err(|e| fail(&d.manifest(), e.to_string()))?;
         if let Some(file) = &r.file {
             copy_into(&d.root.join(file), &target.root.join(file))?;
         }

@@ -17,7 +17,7 @@ mod synth;
 mod verify;
 
 pub use dir::{DatasetDir, finished_record};
-pub use manifest::{Attempt, GateResult, ManifestRecord, stats};
+pub use manifest::{Attempt, GateResult, ManifestRecord, RecordPathError, stats};
 pub use merge::merge;
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};
 pub use shard::Shard;

@@ -133,7 +133,7 @@ fn check_record(
         problem("passed but has no recording".into());
     }
     if let Err(e) = r.check_paths() {
-        problem(e);
+        problem(e.to_string());
         return problems;
     }
     let Some(file) = &r.file else {

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::{Result, bad_value};
 use crate::geometry::TargetKind;
 
 /// Channels of the network's input image without body inputs: noisy target (3), position map
@@ -118,9 +119,9 @@ impl Default for DitConfig {
 
 impl DitConfig {
     /// Names the first bad value (`key = value: what is expected`).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         let bad = |key: &str, value: &dyn std::fmt::Display, expected: &str| {
-            Err(format!("model.{key} = {value}: {expected}"))
+            Err(bad_value(&format!("model.{key}"), value, expected))
         };
         if ![32, 64, 128].contains(&self.resolution) {
             return bad("resolution", &self.resolution, "must be 32, 64 or 128");
@@ -202,20 +203,30 @@ mod tests {
         assert!(c.validate().is_ok());
         c.heads = 3;
         assert_eq!(
-            c.validate().unwrap_err(),
+            c.validate().unwrap_err().to_string(),
             "model.heads = 3: must divide the width"
         );
         c = DitConfig {
             patch: 3,
             ..DitConfig::default()
         };
-        assert!(c.validate().unwrap_err().starts_with("model.patch = 3"));
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("model.patch = 3")
+        );
         c = DitConfig {
             body_inputs: false,
             body_nearest: true,
             ..DitConfig::default()
         };
-        assert!(c.validate().unwrap_err().starts_with("model.body_nearest"));
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("model.body_nearest")
+        );
         c.body_inputs = true;
         assert_eq!(c.input_channels(), INPUT_CHANNELS + 12);
     }

@@ -13,6 +13,8 @@ use serde::{Deserialize, Serialize};
 use sim::Vec3;
 use sim::obstacles::MeshSurface;
 
+use crate::error::{Result, bad_value};
+
 /// The engine's default contact offset, m: where guidance and the push-out put vertices.
 pub const CONTACT_BAND_M: f64 = 0.003;
 
@@ -45,27 +47,20 @@ impl Default for Guidance {
 
 impl Guidance {
     /// Checks the values, naming the first bad one.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         if !(self.weight.is_finite() && self.weight >= 0.0) {
-            return Err(format!(
-                "guidance weight = {} (a weight >= 0 is needed; 0 turns guidance off)",
-                self.weight
-            ));
+            let expected = "a weight >= 0 is needed; 0 turns guidance off";
+            return Err(bad_value("guidance weight", self.weight, expected));
         }
         if !(0.0..=1.0).contains(&self.start) {
-            return Err(format!(
-                "guidance start = {} (a fraction of the steps in [0, 1])",
-                self.start
-            ));
+            let expected = "a fraction of the steps in [0, 1]";
+            return Err(bad_value("guidance start", self.start, expected));
         }
         if self.refine > 16 {
-            return Err(format!(
-                "guidance refine = {} (0 to 16 passes)",
-                self.refine
-            ));
+            return Err(bad_value("guidance refine", self.refine, "0 to 16 passes"));
         }
         if !(self.band_m.is_finite() && (0.0..=0.1).contains(&self.band_m)) {
-            return Err(format!("guidance band = {} m (0 to 0.1 m)", self.band_m));
+            return Err(bad_value("guidance band", self.band_m, "0 to 0.1 m"));
         }
         Ok(())
     }
@@ -340,12 +335,22 @@ pub(crate) mod tests {
             weight: -1.0,
             ..Guidance::default()
         };
-        assert!(bad.validate().unwrap_err().contains("weight = -1"));
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("weight = -1")
+        );
         let late = Guidance {
             start: 1.5,
             ..Guidance::default()
         };
-        assert!(late.validate().unwrap_err().contains("start = 1.5"));
+        assert!(
+            late.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("start = 1.5")
+        );
         let g = Guidance::default();
         assert!(!g.guides(9, 20) && g.guides(10, 20));
         let off = Guidance { weight: 0.0, ..g };

@@ -29,7 +29,7 @@ use sim::obstacles::MeshSurface;
 use sim::recording::TemplateArrays;
 
 use crate::data::{ConditionLayout, body_input_maps, channels_first};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, bad_value};
 use crate::flow::{Conditioned, euler, time_grid};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
 use crate::noise::{generator, normal};
@@ -120,18 +120,18 @@ impl Settings {
     }
 
     /// Checks the values, naming the first bad one.
-    pub fn validate(&self) -> std::result::Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         if !(1..=1000).contains(&self.steps) {
-            return Err(format!("steps = {} (1 to 1000)", self.steps));
+            return Err(bad_value("steps", self.steps, "1 to 1000"));
         }
         if !(self.shift.is_finite() && self.shift > 0.0 && self.shift <= 100.0) {
-            return Err(format!("shift = {} (a number in (0, 100])", self.shift));
+            return Err(bad_value("shift", self.shift, "a number in (0, 100]"));
         }
         if !(1..=64).contains(&self.draws) {
-            return Err(format!("draws = {} (1 to 64)", self.draws));
+            return Err(bad_value("draws", self.draws, "1 to 64"));
         }
         if !(1..=4096).contains(&self.batch) {
-            return Err(format!("batch = {} (1 to 4096 frames)", self.batch));
+            return Err(bad_value("batch", self.batch, "1 to 4096 frames"));
         }
         self.guidance.validate()
     }
@@ -330,7 +330,7 @@ impl<'a> Predictor<'a> {
         settings: &Settings,
         on_frame: &mut dyn FnMut(&PredictedFrame) -> Result<()>,
     ) -> Result<Timing> {
-        settings.validate().map_err(Error::Invalid)?;
+        settings.validate()?;
         let motion = seq.motion;
         let window = self.layout.window;
         if motion.len() <= window {

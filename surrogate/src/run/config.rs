@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::data::TrainingTensors;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, bad_value};
 use crate::model::DitConfig;
 
 /// How rectified-flow times are drawn during training.
@@ -116,9 +116,9 @@ impl Default for TrainConfig {
 
 impl TrainConfig {
     /// Names the first bad value.
-    pub fn validate(&self) -> std::result::Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         let bad = |key: &str, value: &dyn std::fmt::Display, expected: &str| {
-            Err(format!("training.{key} = {value}: {expected}"))
+            Err(bad_value(&format!("training.{key}"), value, expected))
         };
         let positive = |v: f64| v.is_finite() && v > 0.0;
         if self.steps == 0 || self.steps > 100_000_000 {
@@ -206,7 +206,7 @@ pub struct RunConfig {
 
 impl RunConfig {
     /// Both halves checked.
-    pub fn validate(&self) -> std::result::Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         self.model.validate()?;
         self.training.validate()
     }
@@ -322,7 +322,7 @@ mod tests {
         assert!(err.to_string().contains("m.toml") && err.to_string().contains("model.widht"));
         let c = RunConfig::from_toml("[training]\nlr = -1.0\n", "m.toml").unwrap();
         assert_eq!(
-            c.validate().unwrap_err(),
+            c.validate().unwrap_err().to_string(),
             "training.lr = -1: must be in (0, 1]"
         );
         let c = RunConfig::from_toml("[model]\nwidth = 64\nheads = 2\n", "m.toml").unwrap();

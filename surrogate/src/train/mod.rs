@@ -184,10 +184,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     let tensors = TrainingTensors::open(&options.data)?;
     let mut config = options.config.clone();
     config.fit_to(&tensors);
-    config.validate().map_err(|message| Error::Config {
-        path: "the training configuration".into(),
-        message,
-    })?;
+    config.validate()?;
     let (wanted, stored) = (
         config.model.body_channels(),
         tensors.manifest.body_channels(),
