@@ -5,7 +5,6 @@
 mod cli;
 mod commands;
 mod inputs;
-mod output;
 mod run;
 
 use std::process::ExitCode;

@@ -7,6 +7,27 @@ use std::path::Path;
 
 use crate::{Error, Result, Temporary};
 
+/// Makes the folder `path` goes into, if missing (outputs may name new folders).
+pub fn create_folder_of(path: &Path) -> Result<()> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.to_path_buf(),
+            source,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Writes `value` to `path` as pretty JSON and a newline, atomically, its folder made if
+/// missing.
+pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    create_folder_of(path)?;
+    write_with(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, value)?;
+        writeln!(w)
+    })
+}
+
 /// Writes `bytes` to `path` atomically.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_with(path, |w| w.write_all(bytes))
@@ -52,6 +73,17 @@ pub fn write_fallible<E: From<Error>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn json_goes_into_a_new_folder_pretty_with_a_newline() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("new/deeper/out.json");
+        write_json(&path, &serde_json::json!({"a": [1, 2]})).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text, "{\n  \"a\": [\n    1,\n    2\n  ]\n}\n");
+        let file_as_folder = path.join("below.json");
+        assert!(write_json(&file_as_folder, &1).is_err());
+    }
 
     #[test]
     fn a_failed_fill_leaves_nothing_and_a_good_one_replaces_the_file() {

@@ -78,7 +78,7 @@ impl Prepared {
         deadline: Option<Instant>,
         each_frame: impl FnMut(&FrameOutput) -> Result<()>,
     ) -> Result<RunSummary> {
-        crate::recording::create_folder_of(path)?;
+        files::create_folder_of(path)?;
         let mut summary = None;
         files::write_fallible(path, |w| {
             summary = Some(self.record(w, software, deadline, each_frame)?);

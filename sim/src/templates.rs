@@ -128,12 +128,7 @@ pub fn make_template(
 /// Writes a template as OBJ, or PLY when the name ends in `.ply`, atomically (its folder
 /// created if need be).
 pub fn write_template(path: &Path, template: &Garment) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| files::Error::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
-    }
+    files::create_folder_of(path)?;
     let ply = path.extension().is_some_and(|e| e == "ply");
     Ok(files::write_with(path, |w| {
         if ply {

@@ -5,7 +5,7 @@ use serde_json::json;
 use sim::sources::BodyParams;
 
 use crate::cli::BodyArgs;
-use crate::output::{write_json, write_obj};
+use files::write_json;
 
 pub fn run(args: &BodyArgs) -> Result<()> {
     if args.out.is_none() && args.json.is_none() {
@@ -37,7 +37,10 @@ pub fn run(args: &BodyArgs) -> Result<()> {
             model.name(),
             shaped.betas
         );
-        write_obj(out, &posed.vertices, model.faces(), &comment)?;
+        files::create_folder_of(out)?;
+        files::write_with(out, |w| {
+            garments::write_mesh_obj(w, &comment, &posed.vertices, model.faces())
+        })?;
         println!(
             "wrote {} ({} vertices, {} triangles, rest height {:.3} m, {} boundary edges)",
             out.display(),

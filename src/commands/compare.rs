@@ -6,7 +6,7 @@ use serde_json::json;
 use sim::metrics::{FRAME_STRIDE, Scores, compare_recordings};
 
 use crate::cli::CompareArgs;
-use crate::output::write_json;
+use files::write_json;
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     let model = sim::sources::body_model(args.model.body_model.as_deref())?;

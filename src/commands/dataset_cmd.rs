@@ -9,8 +9,8 @@ use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
 use crate::cli::DatasetCommand;
-use crate::output::write_json;
 use crate::run::progress;
+use files::write_json;
 
 pub fn run(command: DatasetCommand) -> Result<()> {
     match command {

@@ -15,7 +15,7 @@ use surrogate::predict::Settings;
 use surrogate::run::TrainedModel;
 
 use crate::cli::DemoArgs;
-use crate::output::write_json;
+use files::write_json;
 use render::recording::{
     RenderJob, comparison_gif, comparison_sheet, render_recording, write_view,
 };

@@ -6,7 +6,7 @@ use serde_json::json;
 use sim::drape_bench::DrapeBench;
 
 use crate::cli::DrapeBenchArgs;
-use crate::output::{write_atomic, write_json};
+use files::write_json;
 
 pub fn run(args: &DrapeBenchArgs) -> Result<()> {
     let max = sim::drape_bench::MAX_GRID_N;
@@ -41,7 +41,8 @@ pub fn run(args: &DrapeBenchArgs) -> Result<()> {
         .iter()
         .flat_map(|p| [p.x, p.z, p.y])
         .collect();
-    write_atomic(&npy, |w| {
+    files::create_folder_of(&npy)?;
+    files::write_with(&npy, |w| {
         use npyz::WriterBuilder;
         let mut writer = npyz::WriteOptions::<f64>::new()
             .default_dtype()

@@ -17,8 +17,8 @@ use surrogate::predict::{Predictor, Settings};
 use surrogate::run::TrainedModel;
 
 use crate::cli::EvaluateArgs;
-use crate::output::write_json;
 use crate::run::{progress, set_threads};
+use files::write_json;
 use surrogate::evaluate::report::{self, Pictures};
 
 pub fn run(args: &EvaluateArgs) -> Result<()> {

@@ -16,7 +16,7 @@ macro_rules! say {
         writeln!(std::io::stdout().lock(), $($arg)*)?;
     }};
 }
-use crate::output::{write_atomic, write_json};
+use files::write_json;
 
 /// Runs a `garments` subcommand.
 pub fn run(command: GarmentsCommand) -> Result<()> {
@@ -109,11 +109,8 @@ fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
         garments::pattern::DEFAULT_EDGE_LENGTH_M
     );
     if let Some(path) = pattern_out {
-        write_atomic(path, |w| {
-            use std::io::Write;
-            writeln!(w, "{}", pattern.to_json())?;
-            Ok(())
-        })?;
+        files::create_folder_of(path)?;
+        files::write_atomic(path, format!("{}\n", pattern.to_json()).as_bytes())?;
         say!("wrote {}", path.display());
     }
     Ok(())

@@ -7,7 +7,7 @@ use serde_json::json;
 use sim::recording::write_body_sequence;
 
 use crate::cli::MotionsCommand;
-use crate::output::write_json;
+use files::write_json;
 
 pub fn run(command: MotionsCommand) -> Result<()> {
     match command {

@@ -11,7 +11,7 @@ use surrogate::predict::{Noise, Settings};
 use surrogate::run::TrainedModel;
 
 use crate::cli::PredictArgs;
-use crate::output::write_json;
+use files::write_json;
 use surrogate::predict::{PredictionStats, SceneRequest, predict_scene};
 
 use crate::run::frames_bar;

@@ -6,7 +6,7 @@ use serde_json::json;
 use sim::regress::run as run_suite;
 
 use crate::cli::RegressArgs;
-use crate::output::write_json;
+use files::write_json;
 
 pub fn run(args: &RegressArgs) -> Result<()> {
     if args.bless {

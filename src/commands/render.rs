@@ -9,8 +9,8 @@ use render::{ColourScale, View};
 use serde_json::json;
 
 use crate::cli::{RenderArgs, ViewArgs};
-use crate::output::write_json;
 use crate::run::gif_progress;
+use files::write_json;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let views = args

@@ -4,8 +4,8 @@
 use anyhow::{Context, Result};
 
 use crate::cli::SimulateArgs;
-use crate::output::write_json;
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
+use files::write_json;
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let mut config = resolve_config(&args.scene)?;

@@ -22,8 +22,8 @@ use sim::dataset::{
 };
 
 use crate::cli::SynthArgs;
-use crate::output::write_json;
 use crate::run::progress;
+use files::write_json;
 
 /// The tiny example spec (4 sequences of 30 frames).
 pub const TINY_SPEC: &str = include_str!("../../specs/tiny.toml");

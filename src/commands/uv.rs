@@ -13,7 +13,7 @@ use surrogate::geometry::{GeometryImage, RootRemoval, TargetKind, Targets};
 
 use crate::cli::UvArgs;
 use crate::inputs;
-use crate::output::write_json;
+use files::write_json;
 use render::recording::save_png;
 
 /// Pixels per side of every picture (texels are drawn as blocks).

@@ -60,7 +60,7 @@ pub fn write_body_sequence(
         }
         writer.finish()
     };
-    super::create_folder_of(path)?;
+    files::create_folder_of(path)?;
     files::write_fallible(path, write)?;
     Ok(meta)
 }

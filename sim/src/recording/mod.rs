@@ -21,17 +21,6 @@ use serde::{Deserialize, Serialize};
 use crate::config::SceneConfig;
 use crate::params::{Material, SolverParams};
 
-/// Makes the folder a recording at `path` goes into, if missing.
-pub(crate) fn create_folder_of(path: &std::path::Path) -> crate::Result<()> {
-    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| crate::Error::Recording {
-            path: path.display().to_string(),
-            message: format!("cannot create its folder: {e}"),
-        }),
-        None => Ok(()),
-    }
-}
-
 /// Topic of the sequence metadata (JSON, once at time 0).
 pub const META_TOPIC: &str = "/sequence/meta";
 /// Template positions (float32 [V, 3], once).
