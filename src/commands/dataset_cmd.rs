@@ -141,47 +141,13 @@ fn stats_cmd(root: &Path, json: Option<&Path>) -> Result<()> {
         "dataset '{}' in {}: {} sequences ({} failed, {} retried), {} frames = {:.2} hours at 30 fps",
         spec.name,
         root.display(),
-        s["sequences"],
-        s["failed"],
-        s["retried"],
-        s["frames"],
-        s["hours"].as_f64().unwrap_or(0.0)
+        s.sequences,
+        s.failed,
+        s.retried,
+        s.frames,
+        s.hours
     );
-    for key in ["splits", "garments", "motions", "failures"] {
-        let Some(map) = s[key].as_object() else {
-            continue;
-        };
-        let row: Vec<String> = map.iter().map(|(k, v)| format!("{k} {v}")).collect();
-        println!(
-            "  {key:<9} {}",
-            if row.is_empty() {
-                "-".into()
-            } else {
-                row.join(", ")
-            }
-        );
-    }
-    for (name, h) in s["material_histograms"].as_object().into_iter().flatten() {
-        println!(
-            "  {name:<14} {:>10.4} .. {:<10.4} {}{}",
-            h["min"].as_f64().unwrap_or(f64::NAN),
-            h["max"].as_f64().unwrap_or(f64::NAN),
-            h["counts"]
-                .as_array()
-                .map(|c| c
-                    .iter()
-                    .map(|v| v.to_string())
-                    .collect::<Vec<_>>()
-                    .join(" "))
-                .unwrap_or_default(),
-            if h["log10"] == true { " (log10)" } else { "" }
-        );
-    }
-    println!(
-        "  simulation: {:.0} s of wall time in all, {:.1} frames/s per sequence worker",
-        s["simulation_wall_s"].as_f64().unwrap_or(0.0),
-        s["simulated_frames_per_s"].as_f64().unwrap_or(0.0)
-    );
+    print!("{s}");
     if let Some(path) = json {
         write_json(path, &s)?;
     }

@@ -1,12 +1,9 @@
 //! What a dataset records per sequence (one manifest line), the quality gates, and the
 //! statistics over a manifest.
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Serialize};
-use serde_json::{Value, json};
 
-use super::plan::{PlannedSequence, SPLITS};
+use super::plan::PlannedSequence;
 use super::spec::GateSpec;
 use crate::SolverParams;
 use crate::params::Material;
@@ -229,78 +226,6 @@ pub enum RecordPathError {
         /// The recording it names.
         file: String,
     },
-}
-
-/// Counts, histograms and totals over manifest records (the `dataset stats` report).
-pub fn stats(records: &[ManifestRecord], fps: f64) -> Value {
-    let mut splits: BTreeMap<String, usize> = SPLITS.iter().map(|s| (s.to_string(), 0)).collect();
-    let mut garments: BTreeMap<&str, usize> = BTreeMap::new();
-    let mut motions: BTreeMap<&str, usize> = BTreeMap::new();
-    let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
-    let mut frames = 0;
-    let mut ok_frames = 0;
-    for r in records {
-        *splits.entry(r.split.clone()).or_default() += 1;
-        *garments.entry(&r.garment).or_default() += 1;
-        *motions.entry(&r.motion).or_default() += 1;
-        frames += r.frames;
-        if r.ok() {
-            ok_frames += r.frames;
-        } else {
-            let reason = r.reason.clone().unwrap_or_else(|| "unknown".into());
-            // Group by the gate, not its measured value.
-            let gate = reason
-                .split(|c: char| c.is_ascii_digit())
-                .next()
-                .unwrap_or("")
-                .trim()
-                .to_string();
-            *reasons
-                .entry(if gate.is_empty() { reason } else { gate })
-                .or_default() += 1;
-        }
-    }
-    let failed = records.iter().filter(|r| !r.ok()).count();
-    let retried = records.iter().filter(|r| r.attempts.len() > 1).count();
-    let histogram = |values: Vec<f64>, log: bool| -> Value {
-        let values: Vec<f64> = values
-            .into_iter()
-            .map(|v| if log { v.log10() } else { v })
-            .filter(|v| v.is_finite())
-            .collect();
-        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let bins = 10;
-        let mut counts = vec![0usize; bins];
-        if hi > lo {
-            for v in &values {
-                counts[(((v - lo) / (hi - lo) * bins as f64) as usize).min(bins - 1)] += 1;
-            }
-        } else if !values.is_empty() {
-            counts[0] = values.len();
-        }
-        json!({"min": lo, "max": hi, "log10": log, "counts": counts})
-    };
-    let wall: f64 = records.iter().map(|r| r.wall_s).sum();
-    json!({
-        "sequences": records.len(),
-        "failed": failed,
-        "retried": retried,
-        "frames": frames,
-        "frames_ok": ok_frames,
-        "hours": frames as f64 / fps / 3600.0,
-        "splits": splits,
-        "garments": garments,
-        "motions": motions,
-        "failures": reasons,
-        "material_histograms": {
-            "k_s_n_per_m": histogram(records.iter().map(|r| r.material.stretch).collect(), false),
-            "rho_kg_per_m2": histogram(records.iter().map(|r| r.material.density).collect(), false),
-            "k_b_n_m": histogram(records.iter().map(|r| r.material.bending).collect(), true),
-        },
-        "simulation_wall_s": wall,
-        "simulated_frames_per_s": if wall > 0.0 { frames as f64 / wall } else { 0.0 },
-    })
 }
 
 #[cfg(test)]

@@ -13,11 +13,12 @@ mod merge;
 mod plan;
 mod shard;
 mod spec;
+mod stats;
 mod synth;
 mod verify;
 
 pub use dir::{DatasetDir, finished_record};
-pub use manifest::{Attempt, GateResult, ManifestRecord, RecordPathError, stats};
+pub use manifest::{Attempt, GateResult, ManifestRecord, RecordPathError};
 pub use merge::merge;
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};
 pub use shard::Shard;
@@ -25,5 +26,6 @@ pub use spec::{
     DatasetSpec, GarmentEntry, GateSpec, MaterialRanges, MotionEntry, SequenceSpec, SolverSpec,
     SplitSpec, Tag,
 };
+pub use stats::{Histogram, Stats, stats};
 pub use synth::{Synthesis, Template, make_templates};
 pub use verify::{Verification, load, verify};
