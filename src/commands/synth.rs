@@ -7,7 +7,6 @@
 //! run leaves only whole files; a re-run skips sequences whose record exists and whose
 //! recording matches the record's checksum.
 
-use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -17,8 +16,8 @@ use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use serde_json::json;
 use sim::dataset::{
-    DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence, Shard, Synthesis, expand_motions,
-    finished_record, make_templates, plan,
+    DatasetDir, DatasetSpec, ManifestRecord, Shard, Synthesis, expand_motions, make_templates,
+    plan, split_finished,
 };
 
 use crate::cli::SynthArgs;
@@ -83,17 +82,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     files::write_json_lines(&dir.plan(), &planned)?;
     let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
     let leftovers = dir.remove_leftovers(&ids)?;
-    // Finished sequences (checked against their checksums once) and the rest.
-    let mut known = HashMap::new();
-    let mut todo: Vec<&PlannedSequence> = Vec::new();
-    for p in &mine {
-        match finished_record(&dir, &p.id) {
-            Some(r) => {
-                known.insert(p.id.clone(), r);
-            }
-            None => todo.push(p),
-        }
-    }
+    let (mut known, todo) = split_finished(&dir, &mine);
     println!(
         "synth '{}': {} sequences planned, shard {k}/{n} has {}, {} already done{}",
         spec.name,

@@ -6,9 +6,10 @@
 //! per finished sequence, written after its recording) and `manifest.jsonl` (the records in
 //! plan order, written when every sequence has one).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use super::ManifestRecord;
+use super::{ManifestRecord, PlannedSequence};
 
 /// Paths inside a dataset folder.
 pub struct DatasetDir {
@@ -50,6 +51,25 @@ impl DatasetDir {
             .map_or(garment.into(), |s| s.to_string_lossy().into_owned());
         self.root.join("templates").join(format!("{name}.obj"))
     }
+}
+
+/// The records of the sequences of `planned` that are finished ([`finished_record`]: each
+/// checked against its checksum once), by id, and the sequences still to run, in order.
+pub fn split_finished<'a>(
+    dir: &DatasetDir,
+    planned: &[&'a PlannedSequence],
+) -> (HashMap<String, ManifestRecord>, Vec<&'a PlannedSequence>) {
+    let mut finished = HashMap::new();
+    let mut todo = Vec::new();
+    for &p in planned {
+        match finished_record(dir, &p.id) {
+            Some(r) => {
+                finished.insert(p.id.clone(), r);
+            }
+            None => todo.push(p),
+        }
+    }
+    (finished, todo)
 }
 
 /// A finished sequence's record, if it is complete: the record parses and its recording (if

@@ -17,7 +17,7 @@ mod stats;
 mod synth;
 mod verify;
 
-pub use dir::{DatasetDir, finished_record};
+pub use dir::{DatasetDir, finished_record, split_finished};
 pub use manifest::{Attempt, GateResult, ManifestRecord, RecordPathError};
 pub use merge::merge;
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};

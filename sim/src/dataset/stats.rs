@@ -193,6 +193,9 @@ mod tests {
         let none = Histogram::of(std::iter::empty(), false);
         assert!(none.min.is_infinite() && none.counts.iter().all(|&c| c == 0));
         let text = stats(&[], 30.0).to_string();
-        assert!(text.contains("splits    test 0,") && text.contains("train 0"), "{text}");
+        assert!(
+            text.contains("splits    test 0,") && text.contains("train 0"),
+            "{text}"
+        );
     }
 }
