@@ -173,7 +173,12 @@ pub struct TensorManifest {
     pub every: usize,
     /// Root rotation the canonical frame removes.
     pub root: RootRemoval,
-    /// Condition vector blocks.
+    /// The condition layout (shape count, window, material ranges, scaling), stored once:
+    /// prediction builds every condition vector from it. Absent in manifests written before
+    /// 2026-12-04, whose layout [`TensorManifest::condition_layout`] infers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition_layout: Option<ConditionLayout>,
+    /// Condition vector blocks (what each holds, for readers; [`ConditionLayout::blocks`]).
     pub condition: Vec<Block>,
     /// Condition vector length.
     pub condition_dim: usize,
@@ -216,9 +221,13 @@ impl TensorManifest {
             .map_or(0, |s| s.mean.len())
     }
 
-    /// The condition layout the manifest records, on a body model with `betas` shape
-    /// coefficients.
+    /// The condition layout the manifest records; for a manifest written before it was
+    /// stored, the one its blocks, window and material ranges describe on a body model with
+    /// `betas` shape coefficients.
     pub fn condition_layout(&self, betas: usize) -> ConditionLayout {
+        if let Some(layout) = self.condition_layout {
+            return layout;
+        }
         let bounded = self
             .condition
             .iter()
@@ -652,6 +661,7 @@ pub fn write_tensors(
         window: options.window,
         every: options.every,
         root: options.root,
+        condition_layout: Some(layout),
         condition: layout.blocks(),
         condition_dim: dim,
         material_ranges: spec.material,
