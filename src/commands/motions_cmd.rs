@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use motions::library::{MOTIONS, MotionSpec};
-use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES, Motion, NUM_JOINTS};
+use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES};
 use serde_json::json;
 use sim::recording::write_body_sequence;
 
@@ -94,47 +94,33 @@ fn show(
     json_path: Option<&std::path::Path>,
 ) -> Result<()> {
     let model = sim::sources::body_model(model_path)?;
-    let shaped = model.shape(&[])?;
-    let motion = sim::sources::motion(source, &model, &shaped)?;
-    let summary = summarize(&motion);
+    let motion = sim::sources::motion(source, &model, &model.shape(&[])?)?;
+    let (first, last) = (
+        motion.frames[0].transl,
+        motion.frames[motion.len() - 1].transl,
+    );
+    let travel: [f64; 3] = std::array::from_fn(|k| last[k] - first[k]);
+    let max_angle = motion.max_joint_angles_deg();
     println!("motion    {}", motion.name);
-    println!(
-        "frames    {} at {} fps ({:.2} s)",
-        motion.len(),
-        motion.fps,
-        motion.duration()
-    );
-    let travel = summary["root_travel_m"]
-        .as_array()
-        .cloned()
-        .unwrap_or_default();
-    println!(
-        "root      travel x {:+.3} y {:+.3} z {:+.3} m",
-        travel[0].as_f64().unwrap_or(0.0),
-        travel[1].as_f64().unwrap_or(0.0),
-        travel[2].as_f64().unwrap_or(0.0)
-    );
+    let (frames, fps, duration) = (motion.len(), motion.fps, motion.duration());
+    println!("frames    {frames} at {fps} fps ({duration:.2} s)");
+    let [x, y, z] = travel;
+    println!("root      travel x {x:+.3} y {y:+.3} z {z:+.3} m");
     println!("joint rotation ranges (degrees from the T-pose, max over frames):");
-    for j in 0..NUM_JOINTS {
-        let deg = summary["max_joint_angle_deg"][j].as_f64().unwrap_or(0.0);
-        if deg > 0.5 {
-            println!("  {:<15} {:>6.1}", JOINT_NAMES[j], deg);
-        }
+    for (name, deg) in JOINT_NAMES
+        .iter()
+        .zip(&max_angle)
+        .filter(|(_, d)| **d > 0.5)
+    {
+        println!("  {name:<15} {deg:>6.1}");
     }
     if let Some(path) = json_path {
+        let summary = json!({
+            "name": motion.name, "frames": frames, "fps": fps, "duration_s": duration,
+            "root_travel_m": travel, "max_joint_angle_deg": max_angle, "joint_names": JOINT_NAMES,
+            "gender": motion.gender, "betas": motion.betas,
+        });
         write_json(path, &summary)?;
     }
     Ok(())
-}
-
-fn summarize(motion: &Motion) -> serde_json::Value {
-    let first = motion.frames[0].transl;
-    let last = motion.frames[motion.len() - 1].transl;
-    let max_angle = motion.max_joint_angles_deg();
-    json!({
-        "name": motion.name, "frames": motion.len(), "fps": motion.fps, "duration_s": motion.duration(),
-        "root_travel_m": [last[0] - first[0], last[1] - first[1], last[2] - first[2]],
-        "max_joint_angle_deg": max_angle, "joint_names": JOINT_NAMES,
-        "gender": motion.gender, "betas": motion.betas,
-    })
 }
