@@ -65,9 +65,11 @@ pub fn run(args: &UvArgs) -> Result<()> {
         }
     });
     tiles.push((mask, "mask (grey: read back)".to_string()));
+    let texel_cm = GeometryImage::texel_cm(&template, r);
+    let mut floor_line = String::new();
     let mut summary = json!({
         "source": args.source, "resolution": r, "coverage": atlas.coverage(),
-        "texel_cm": GeometryImage::texel_cm(&template, r), "vertices": template.positions.len(),
+        "texel_cm": texel_cm, "vertices": template.positions.len(),
         "uv_corners": template.uvs.len(), "charts": atlas.charts(),
         "root": args.root,
     });
@@ -104,6 +106,16 @@ pub fn run(args: &UvArgs) -> Result<()> {
         summary["worst_vertex"] = floor.worst_vertex.into();
         summary["target_mean_cm"] = floor.target_mean_cm.into();
         summary["target_frames"] = json!(frames);
+        floor_line = format!(
+            "; round trip ({}, {} frames): mean {:.3} cm, p95 {:.3} cm, max {:.2} cm (vertex {}); mean target {:.2} cm",
+            kind.name(),
+            floor.frames_scored,
+            floor.mean_cm,
+            floor.p95_cm,
+            floor.max_cm,
+            floor.worst_vertex,
+            floor.target_mean_cm,
+        );
     }
     let names = ["position_map.png", "mask.png"];
     for (i, (tile, _)) in tiles.iter().enumerate() {
@@ -123,20 +135,8 @@ pub fn run(args: &UvArgs) -> Result<()> {
         template.uvs.len(),
         atlas.charts(),
         atlas.coverage(),
-        summary["texel_cm"].as_f64().unwrap_or(0.0),
-        match &sequence {
-            Some(_) => format!(
-                "; round trip ({}, {} frames): mean {:.3} cm, p95 {:.3} cm, max {:.2} cm (vertex {}); mean target {:.2} cm",
-                kind.name(),
-                summary["frames_scored"],
-                summary["roundtrip_E_v_cm"].as_f64().unwrap_or(0.0),
-                summary["roundtrip_p95_cm"].as_f64().unwrap_or(0.0),
-                summary["roundtrip_max_cm"].as_f64().unwrap_or(0.0),
-                summary["worst_vertex"],
-                summary["target_mean_cm"].as_f64().unwrap_or(0.0),
-            ),
-            None => String::new(),
-        }
+        texel_cm,
+        floor_line
     );
     println!("  wrote {}", sheet.display());
     if let Some(path) = &args.json {
