@@ -6,12 +6,11 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use rayon::prelude::*;
 use serde_json::{Value, json};
 use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
-use surrogate::evaluate::tables::{SequenceResult, aggregate, text_table};
+use surrogate::evaluate::tables::{aggregate, text_table};
 use surrogate::evaluate::{Evaluation, describe_model, document, fingerprint, select};
 use surrogate::predict::{Predictor, Settings};
 use surrogate::run::TrainedModel;
@@ -84,30 +83,12 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     let rest = "({elapsed}, eta {eta}) {msg}";
     let bar = progress("evaluating", records.len(), "sequences", rest, args.quiet);
     let started = Instant::now();
-    let results = records
-        .par_iter()
-        .map(|record| {
-            let file = cache
-                .as_ref()
-                .map(|d| d.join(format!("{}.json", record.id)));
-            if let Some(hit) = file.as_deref().and_then(|f| evaluation.cached(f, record)) {
-                bar.inc(1);
-                return Ok((hit, true));
-            }
-            let result = evaluation
-                .sequence(record)
-                .with_context(|| format!("evaluating sequence {}", record.id))?;
-            if let Some(f) = &file {
-                write_json(f, &result)?;
-            }
-            bar.set_message(record.id.clone());
-            bar.inc(1);
-            Ok((result, false))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let done = |id: &str| {
+        bar.set_message(id.to_string());
+        bar.inc(1);
+    };
+    let (results, reused) = evaluation.all(&records, cache.as_deref(), &done)?;
     bar.finish_and_clear();
-    let reused = results.iter().filter(|(_, hit)| *hit).count();
-    let results: Vec<SequenceResult> = results.into_iter().map(|(r, _)| r).collect();
     let asked =
         json!({"splits": args.splits, "max_sequences": args.max_sequences, "data": args.data});
     let output = document(&results, model_json, &settings, asked);

@@ -118,6 +118,14 @@ pub enum Error {
         /// What it must be.
         expected: String,
     },
+    /// Scoring one sequence of an evaluation failed.
+    #[error("evaluating sequence {id}: {source}")]
+    Sequence {
+        /// The sequence.
+        id: String,
+        /// What failed.
+        source: Box<Error>,
+    },
     /// Training diverged: the loss stopped being a finite number.
     #[error(
         "training diverged: the loss became {loss} at step {step} (a lower training.lr in {config} may help)"

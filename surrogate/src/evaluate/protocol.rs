@@ -9,6 +9,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use motions::BodyModel;
+use rayon::prelude::*;
 use serde_json::{Value, json};
 use sim::dataset::ManifestRecord;
 
@@ -236,6 +237,39 @@ impl Evaluation<'_> {
         let text = std::fs::read_to_string(path).ok()?;
         let r: SequenceResult = serde_json::from_str(&text).ok()?;
         (r.settings == self.settings_of(record) && r.split == record.split).then_some(r)
+    }
+
+    /// Scores `records` in parallel, each result cached as `cache/<id>.json` when a cache
+    /// folder is given (a result cached with this run's settings on the same recording is
+    /// reused); `done(id)` is told after each. Returns the results in order and how
+    /// many were reused.
+    pub fn all(
+        &self,
+        records: &[ManifestRecord],
+        cache: Option<&Path>,
+        done: &(dyn Fn(&str) + Sync),
+    ) -> Result<(Vec<SequenceResult>, usize)> {
+        let results = records
+            .par_iter()
+            .map(|record| {
+                let file = cache.map(|d| d.join(format!("{}.json", record.id)));
+                if let Some(hit) = file.as_deref().and_then(|f| self.cached(f, record)) {
+                    done(&record.id);
+                    return Ok((hit, true));
+                }
+                let result = self.sequence(record).map_err(|e| Error::Sequence {
+                    id: record.id.clone(),
+                    source: Box::new(e),
+                })?;
+                if let Some(f) = &file {
+                    files::write_json(f, &result)?;
+                }
+                done(&record.id);
+                Ok((result, false))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let reused = results.iter().filter(|(_, hit)| *hit).count();
+        Ok((results.into_iter().map(|(r, _)| r).collect(), reused))
     }
 
     /// The settings of one sequence's rows: the run's, and the recording they scored.
