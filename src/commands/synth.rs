@@ -144,19 +144,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
                 // One line per sequence where no bar is drawn (logs of batch jobs), and for every
                 // failure.
                 if !record.ok() || (bar.is_hidden() && !args.quiet) {
-                    let line = format!(
-                        "  {} {} ({} frames, {:.1} s){}",
-                        record.id,
-                        record.status,
-                        record.frames,
-                        record.wall_s,
-                        record
-                            .reason
-                            .as_ref()
-                            .map(|r| format!(": {r}"))
-                            .unwrap_or_default()
-                    );
-                    bar.suspend(|| eprintln!("{line}"));
+                    bar.suspend(|| eprintln!("  {record}"));
                 }
                 bar.set_message(format!(
                     "{:.1} frames/s",
@@ -173,19 +161,18 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let frames = frames_done.load(Ordering::Relaxed);
     let failed = failed.load(Ordering::Relaxed);
     let missing = dir.write_manifest(&planned, &known)?;
+    let per_s = |count: usize| if wall > 0.0 { count as f64 / wall } else { 0.0 };
+    let (frames_per_s, per_hour, simulated) =
+        (per_s(frames), per_s(todo.len()) * 3600.0, todo.len());
     let summary = json!({
         "name": spec.name, "shard": [k, n], "planned": planned.len(), "shard_sequences": mine.len(),
-        "simulated": todo.len(), "skipped": mine.len() - todo.len(), "failed": failed,
-        "frames": frames, "wall_s": wall,
-        "frames_per_s": if wall > 0.0 { frames as f64 / wall } else { 0.0 },
-        "sequences_per_hour": if wall > 0.0 { todo.len() as f64 / wall * 3600.0 } else { 0.0 },
-        "jobs": jobs, "manifest": (missing == 0).then(|| dir.manifest()),
+        "simulated": simulated, "skipped": mine.len() - simulated, "failed": failed,
+        "frames": frames, "wall_s": wall, "frames_per_s": frames_per_s,
+        "sequences_per_hour": per_hour, "jobs": jobs,
+        "manifest": (missing == 0).then(|| dir.manifest()),
     });
     println!(
-        "synth: {} sequences simulated ({failed} failed their gates), {frames} frames in {wall:.1} s ({:.1} frames/s, {:.0} sequences/h, {jobs} jobs)",
-        todo.len(),
-        summary["frames_per_s"].as_f64().unwrap_or(0.0),
-        summary["sequences_per_hour"].as_f64().unwrap_or(0.0),
+        "synth: {simulated} sequences simulated ({failed} failed their gates), {frames} frames in {wall:.1} s ({frames_per_s:.1} frames/s, {per_hour:.0} sequences/h, {jobs} jobs)",
     );
     if missing == 0 {
         println!("  wrote {}", dir.manifest().display());

@@ -162,6 +162,18 @@ pub struct ManifestRecord {
     pub wall_s: f64,
 }
 
+/// One line of a synthesis log: `id status (frames, wall time): reason`.
+impl std::fmt::Display for ManifestRecord {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let (id, status, frames, wall) = (&self.id, &self.status, self.frames, self.wall_s);
+        write!(f, "{id} {status} ({frames} frames, {wall:.1} s)")?;
+        match &self.reason {
+            Some(reason) => write!(f, ": {reason}"),
+            None => Ok(()),
+        }
+    }
+}
+
 impl ManifestRecord {
     /// The record of planned sequence `p` before any attempt: what the plan says of it,
     /// `failed` with no attempts, no recording and no frames yet.
