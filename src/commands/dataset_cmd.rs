@@ -102,31 +102,15 @@ fn tensors(
 
 fn verify(root: &Path, json: Option<&Path>) -> Result<()> {
     let found = sim::dataset::verify(root)?;
-    let problems = &found.problems;
-    println!(
-        "verify {}: {} sequences in the manifest ({} planned), {} passed their gates, {} failed (recorded with reasons)",
-        root.display(),
-        found.sequences,
-        found.planned,
-        found.passed,
-        found.sequences - found.passed
-    );
-    for p in problems.iter().take(50) {
-        println!("  problem: {p}");
-    }
+    println!("verify {}: {found}", root.display());
     if let Some(path) = json {
-        write_json(
-            path,
-            &serde_json::json!({"sequences": found.sequences, "planned": found.planned, "passed": found.passed,
-                "problems": problems, "ok": problems.is_empty()}),
-        )?;
+        write_json(path, &found)?;
     }
-    if !problems.is_empty() {
+    if let Some(first) = found.problems.first() {
+        let count = found.problems.len();
         bail!(
-            "{}: {} problems found (first: {})",
-            root.display(),
-            problems.len(),
-            problems[0]
+            "{}: {count} problems found (first: {first})",
+            root.display()
         );
     }
     println!("  every checksum, schema, count and gate result checks out");

@@ -51,14 +51,7 @@ fn list(json: Option<&Path>) -> Result<()> {
     );
     for d in DESIGNS {
         let row = d.summary()?;
-        say!(
-            "{:<24} {:<6} {:>8} {:>6}  {}",
-            row.name,
-            row.split,
-            row.vertices,
-            row.panels,
-            row.description
-        );
+        say!("{row}");
         rows.push(row);
     }
     if let Some(path) = json {

@@ -23,6 +23,18 @@ pub struct DesignSummary {
     pub description: &'static str,
 }
 
+/// The line `garments list` prints: name, split, vertices, panels, what it is.
+impl std::fmt::Display for DesignSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let (name, split, vertices, panels) = (self.name, self.split, self.vertices, self.panels);
+        write!(
+            f,
+            "{name:<24} {split:<6} {vertices:>8} {panels:>6}  {}",
+            self.description
+        )
+    }
+}
+
 impl Design {
     /// Meshes the design at the default edge length and counts its template.
     pub fn summary(&self) -> Result<DesignSummary> {

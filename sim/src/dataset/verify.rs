@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::recording::Recording;
 
 /// What verifying a dataset found.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Verification {
     /// Sequences in the manifest.
     pub sequences: usize,
@@ -19,6 +19,25 @@ pub struct Verification {
     pub passed: usize,
     /// Every problem, each naming the sequence or file.
     pub problems: Vec<String>,
+    /// Whether there is none.
+    pub ok: bool,
+}
+
+/// The counts and the first 50 problems, as `dataset verify` prints them.
+impl std::fmt::Display for Verification {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let (sequences, planned, passed) = (self.sequences, self.planned, self.passed);
+        let failed = sequences - passed;
+        write!(
+            f,
+            "{sequences} sequences in the manifest ({planned} planned), {passed} passed their \
+             gates, {failed} failed (recorded with reasons)"
+        )?;
+        for p in self.problems.iter().take(50) {
+            write!(f, "\n  problem: {p}")?;
+        }
+        Ok(())
+    }
 }
 
 /// The spec, plan and manifest of a dataset folder (an error if the manifest is missing: the
@@ -79,6 +98,7 @@ pub fn verify(root: &Path) -> Result<Verification> {
         sequences: records.len(),
         planned: planned.len(),
         passed,
+        ok: problems.is_empty(),
         problems,
     })
 }
