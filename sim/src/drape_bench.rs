@@ -4,6 +4,7 @@
 //! 5 mm contact radius, 60 frames at 30 fps, no ground. The measures are the peers'
 //! (`scene_metrics.py`), computed in their z-up frame.
 
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -104,6 +105,7 @@ impl DrapeBench {
         let times = solver.take_times();
         let measures = DrapeMeasures::of(&state.positions, mesh.rest(), n);
         Ok(DrapeResult {
+            sim: "dit-garment projective dynamics + exact Coulomb contact",
             n,
             t_sim_2s_wall_s: wall,
             setup_s,
@@ -111,6 +113,7 @@ impl DrapeBench {
             substeps_per_frame: self.params.substeps,
             max_iterations: self.params.max_iterations,
             mean_iterations: iterations as f64 / (60 * self.params.substeps) as f64,
+            self_contact: self.params.self_contact,
             measures,
             stages: times,
             final_positions: state.positions,
@@ -221,9 +224,11 @@ pub fn projected_area(positions: &[Vec3], n: usize, res: f64, extent: f64) -> f6
     mask.iter().filter(|&&b| b).count() as f64 * res * res
 }
 
-/// Result of a drape-bench run.
+/// Result of a drape-bench run; it serializes with the keys the peers' runs report.
 #[derive(Debug, Clone, Serialize)]
 pub struct DrapeResult {
+    /// The simulator, in words.
+    pub sim: &'static str,
     /// Vertices per side.
     pub n: usize,
     /// Wall time of the 2 s simulation, s (factorization excluded).
@@ -235,13 +240,17 @@ pub struct DrapeResult {
     /// Substeps per frame.
     pub substeps_per_frame: usize,
     /// Iteration cap per substep.
+    #[serde(rename = "iterations_per_substep")]
     pub max_iterations: usize,
     /// Mean iterations per substep.
     pub mean_iterations: f64,
+    /// Whether cloth-cloth contact was on.
+    pub self_contact: bool,
     /// Quality measures of the final frame.
     #[serde(flatten)]
     pub measures: DrapeMeasures,
     /// Where the time went.
+    #[serde(rename = "stages_s")]
     pub stages: StageTimes,
     /// Final positions (y-up, grid order).
     #[serde(skip)]
@@ -251,9 +260,49 @@ pub struct DrapeResult {
     pub trajectory: Vec<Vec<Vec3>>,
 }
 
+impl DrapeResult {
+    /// Writes the final vertices as the peers' runs do: `.npy`, float64 `[n * n, 3]`, z up
+    /// (x, z, y of ours), grid order; atomically, its folder made if missing.
+    pub fn write_final_npy(&self, path: &Path) -> Result<()> {
+        use npyz::WriterBuilder;
+        let data = self.final_positions.iter().flat_map(|p| [p.x, p.z, p.y]);
+        files::create_folder_of(path)?;
+        files::write_with(path, |w| {
+            let mut writer = npyz::WriteOptions::<f64>::new()
+                .default_dtype()
+                .shape(&[self.final_positions.len() as u64, 3])
+                .writer(w)
+                .begin_nd()?;
+            writer.extend(data)?;
+            writer.finish()
+        })?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The final vertices go out z-up as `[n * n, 3]` float64, readable by npyz (as NumPy
+    /// reads them), and the JSON carries the peers' keys.
+    #[test]
+    fn the_result_is_written_in_the_peers_layout() {
+        let r = DrapeBench::new(4).run().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("new/final_n4.npy");
+        r.write_final_npy(&path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+        assert_eq!(npy.shape(), &[16, 3]);
+        let values: Vec<f64> = npy.into_vec().unwrap();
+        let p = r.final_positions[5];
+        assert_eq!(&values[15..18], &[p.x, p.z, p.y]);
+        let json = serde_json::to_value(&r).unwrap();
+        for key in ["iterations_per_substep", "stages_s", "drape_proxy", "self_contact", "sim"] {
+            assert!(json.get(key).is_some(), "{key}: {json}");
+        }
+    }
 
     #[test]
     fn flat_grid_measures() {
