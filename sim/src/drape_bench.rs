@@ -299,7 +299,13 @@ mod tests {
         let p = r.final_positions[5];
         assert_eq!(&values[15..18], &[p.x, p.z, p.y]);
         let json = serde_json::to_value(&r).unwrap();
-        for key in ["iterations_per_substep", "stages_s", "drape_proxy", "self_contact", "sim"] {
+        for key in [
+            "iterations_per_substep",
+            "stages_s",
+            "drape_proxy",
+            "self_contact",
+            "sim",
+        ] {
             assert!(json.get(key).is_some(), "{key}: {json}");
         }
     }

@@ -12,7 +12,7 @@ use surrogate::run::TrainedModel;
 
 use crate::cli::PredictArgs;
 use files::write_json;
-use surrogate::predict::{PredictionStats, SceneRequest, predict_scene};
+use surrogate::predict::{SceneRequest, predict_scene};
 
 use crate::run::frames_bar;
 use crate::run::{prepare, resolve_inputs, set_threads};
@@ -56,30 +56,22 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let bar = frames_bar("predicting", prepared.scene.num_frames(), args.quiet);
     let p = predict_scene(&prepared, &request, &mut || bar.inc(1))?;
     bar.finish_and_clear();
-    let (garment, scene) = (&prepared.garment, &prepared.scene);
-    let PredictionStats {
-        finite,
-        max_penetration_m: max_penetration,
-        max_inside,
-        pushed,
-        ref collision,
-        timing,
-    } = p.stats;
+    let (garment, scene, stats) = (&prepared.garment, &prepared.scene, &p.stats);
     let (frames, frames_per_s, seen) = (p.frames, p.frames_per_s, p.seen);
-    let (e_c, e_c_vertex) = (p.e_c, p.e_c_vertex);
+    let (max_penetration, pushed, timing) = (stats.max_penetration_m, stats.pushed, stats.timing);
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(path) = &args.json {
         let threads = rayon::current_num_threads();
         write_json(
             path,
             &json!({
-                "frames": frames, "finite": finite, "frames_per_s": frames_per_s,
+                "frames": frames, "finite": stats.finite, "frames_per_s": frames_per_s,
                 "wall_s": wall_s, "steps": settings.steps, "guidance": settings.guidance.weight,
                 "guidance_start": settings.guidance.start, "batch": settings.batch,
                 "draws": settings.draws,
-                "E_c_percent": e_c, "E_c_vertex_percent": e_c_vertex,
-                "frames_scored": collision.len(),
-                "max_penetration_m": max_penetration, "max_verts_inside": max_inside,
+                "E_c_percent": p.e_c, "E_c_vertex_percent": p.e_c_vertex,
+                "frames_scored": stats.collision.len(),
+                "max_penetration_m": max_penetration, "max_verts_inside": stats.max_inside,
                 "pushed_vertices": pushed, "vertices": p.vertices, "model": model_name,
                 "garment": garment.name, "template_seen_in_training": seen,
                 "motion": scene.motion.name, "seed": settings.seed,
@@ -107,7 +99,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     );
     println!(
         "  E_c {:.2}% of surface samples inside the body, max penetration {:.1} mm{}; wrote {}",
-        e_c,
+        p.e_c,
         max_penetration.unwrap_or(f64::NAN) * 1e3,
         if settings.resolve_penetration {
             format!(", {pushed} vertices pushed out after sampling")
