@@ -27,20 +27,15 @@ pub fn run(args: &RegressArgs) -> Result<()> {
         "{:<40} {:>12} {:>12} {:>11}  result  unit",
         "scenario", "expected", "measured", "tolerance"
     );
-    let mut failed = 0;
     for o in &outcomes {
-        let result = if o.pass { "pass" } else { "FAIL" };
-        failed += !o.pass as usize;
-        println!(
-            "{:<40} {:>12.6} {:>12.6} {:>11.3e}  {result:<6}  {}",
-            o.name, o.expected, o.measured, o.tolerance, o.unit
-        );
+        println!("{o}");
     }
     if let Some(path) = &args.json {
         write_json(path, &json!({ "scenarios": outcomes, "long": args.long }))?;
     }
     let passed = outcomes.iter().filter(|o| o.pass).count();
     println!("{passed} of {} scenarios pass", outcomes.len());
+    let failed = outcomes.len() - passed;
     if failed > 0 {
         bail!("{failed} scenario(s) failed");
     }

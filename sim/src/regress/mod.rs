@@ -45,6 +45,19 @@ pub struct Outcome {
     pub unit: String,
 }
 
+/// One row of the suite's table: name, expected, measured, tolerance, pass or FAIL, unit.
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let (name, expected, measured) = (&self.name, self.expected, self.measured);
+        let result = if self.pass { "pass" } else { "FAIL" };
+        let (tolerance, unit) = (self.tolerance, &self.unit);
+        write!(
+            f,
+            "{name:<40} {expected:>12.6} {measured:>12.6} {tolerance:>11.3e}  {result:<6}  {unit}"
+        )
+    }
+}
+
 impl Outcome {
     pub(crate) fn new(
         name: &str,
