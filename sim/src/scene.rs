@@ -232,6 +232,23 @@ pub struct RunSummary {
     pub posing_s: f64,
 }
 
+/// What a run's quality figures were, in one line: penetration (apart from and inside the
+/// body's own overlaps), stretch and self-intersections.
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let (depth, inside) = (self.max_penetration_m * 1e3, self.max_verts_inside);
+        let overlap = self.max_penetration_overlap_m * 1e3;
+        let inside_overlap = self.max_verts_inside_overlap;
+        let (stretch, crossings) = (self.max_edge_stretch, self.max_self_intersections);
+        write!(
+            f,
+            "max penetration {depth:.1} mm, at most {inside} vertices inside (where the body \
+             overlaps itself: {overlap:.1} mm, {inside_overlap}), max edge stretch {stretch:.3}, \
+             at most {crossings} self-intersections"
+        )
+    }
+}
+
 fn to_vec3(p: &[[f64; 3]]) -> Vec<Vec3> {
     p.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect()
 }

@@ -39,15 +39,6 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         s.wall_s,
         s.frames_per_s
     );
-    println!(
-        "  max penetration {:.1} mm, at most {} vertices inside (where the body overlaps itself: {:.1} mm, {}), max edge stretch {:.3}, at most {} self-intersections; wrote {}",
-        s.max_penetration_m * 1e3,
-        s.max_verts_inside,
-        s.max_penetration_overlap_m * 1e3,
-        s.max_verts_inside_overlap,
-        s.max_edge_stretch,
-        s.max_self_intersections,
-        out.display()
-    );
+    println!("  {s}; wrote {}", out.display());
     Ok(())
 }
