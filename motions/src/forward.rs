@@ -23,6 +23,21 @@ pub struct ShapedBody {
     pub joints: [[f64; 3]; NUM_JOINTS],
 }
 
+impl ShapedBody {
+    /// Its height in the rest pose: the vertical (y) extent of its vertices, metres.
+    pub fn height(&self) -> f64 {
+        vertical_extent(&self.vertices)
+    }
+}
+
+/// The vertical (y) extent of `vertices`.
+fn vertical_extent(vertices: &[[f64; 3]]) -> f64 {
+    let (lo, hi) = vertices.iter().fold((f64::MAX, f64::MIN), |(lo, hi), v| {
+        (lo.min(v[1]), hi.max(v[1]))
+    });
+    hi - lo
+}
+
 /// A rigid transform: rotation then translation (p' = R p + t).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Transform {
@@ -48,6 +63,13 @@ pub struct PosedBody {
     /// World transform of each joint's frame (smplx's `G` plus the translation): rotation of
     /// the segment and position of its joint.
     pub transforms: [Transform; NUM_JOINTS],
+}
+
+impl PosedBody {
+    /// The vertical (y) extent of its vertices, metres.
+    pub fn height(&self) -> f64 {
+        vertical_extent(&self.vertices)
+    }
 }
 
 /// Pose input of one frame: 72 axis-angle values (global orientation, then 23 body joints,

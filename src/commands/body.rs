@@ -29,7 +29,7 @@ pub fn run(args: &BodyArgs) -> Result<()> {
         frame = *f;
     }
     let posed = model.pose(&shaped, &frame)?;
-    let height = super::height(&shaped.vertices);
+    let height = shaped.height();
     let boundary = model.boundary_edge_count();
     if let Some(out) = &args.out {
         let comment = format!(
@@ -58,7 +58,7 @@ pub fn run(args: &BodyArgs) -> Result<()> {
                 "faces": model.faces().len(),
                 "boundary_edges": boundary,
                 "height_m": height,
-                "posed_height_m": super::height(&posed.vertices),
+                "posed_height_m": posed.height(),
                 "betas": shaped.betas,
                 "beta_names": model.beta_names(),
                 "joints": posed.joints,

@@ -103,11 +103,3 @@ fn check_outputs(command: &Command) -> Result<()> {
     }
     Ok(())
 }
-
-/// Vertical extent of a vertex set, metres.
-pub fn height(vertices: &[[f64; 3]]) -> f64 {
-    let (lo, hi) = vertices.iter().fold((f64::MAX, f64::MIN), |(lo, hi), v| {
-        (lo.min(v[1]), hi.max(v[1]))
-    });
-    hi - lo
-}
