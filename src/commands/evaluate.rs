@@ -44,13 +44,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         .as_ref()
         .map(|t| Predictor::new(t, &body))
         .transpose()?;
-    let floor = trained
-        .as_ref()
-        .map_or(FloorMaps::default(), |t| FloorMaps {
-            resolution: t.data.resolution,
-            target: t.data.target,
-            root: t.data.root,
-        });
+    let floor = FloorMaps::of(trained.as_ref());
     let baselines = args
         .baselines
         .iter()

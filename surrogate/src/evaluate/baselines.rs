@@ -38,6 +38,18 @@ impl Default for FloorMaps {
     }
 }
 
+impl FloorMaps {
+    /// The maps of the model scored beside it (its resolution, target and root removal), so
+    /// the floor bounds that model; the default maps without one.
+    pub fn of(model: Option<&crate::run::TrainedModel>) -> Self {
+        model.map_or_else(Self::default, |t| Self {
+            resolution: t.data.resolution,
+            target: t.data.target,
+            root: t.data.root,
+        })
+    }
+}
+
 /// Which baseline.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Baseline {
