@@ -25,10 +25,10 @@ use crate::error::{Error, Result};
 use crate::mesh::Garment;
 
 use elements::normalize_uvs;
-#[cfg(test)]
-pub(crate) use orientation::doubled_normal;
 pub(crate) use orientation::outward_score;
 use orientation::{inward_pieces, orient};
+#[cfg(test)]
+pub(crate) use topology::doubled_normal;
 pub(crate) use topology::remove_unreferenced;
 use topology::{degenerate_triangles, duplicate_triangles, edge_triangles, keep_triangles};
 

@@ -4,9 +4,19 @@
 
 use std::collections::{BTreeMap, HashSet};
 
-use super::orientation::doubled_normal;
 use super::{Finding, add};
 use crate::mesh::Garment;
+
+/// (b - a) x (c - a): the triangle's normal scaled by twice its area.
+pub(crate) fn doubled_normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ]
+}
 
 /// What the topology checks leave for the orientation and scale checks.
 pub(super) struct Topology {

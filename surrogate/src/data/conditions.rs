@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use sim::Material;
 use sim::dataset::MaterialRanges;
 
-use super::tensors::Stats;
+use super::stats::Stats;
 use crate::error::Result;
 
 /// Joints whose rotations enter the condition: SMPL's 22 body joints (the hands are dropped:

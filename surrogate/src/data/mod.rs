@@ -5,6 +5,7 @@
 mod conditions;
 mod frames;
 mod sequence;
+mod stats;
 mod tensors;
 
 pub use conditions::{
@@ -12,8 +13,9 @@ pub use conditions::{
 };
 pub use frames::{Frames, TrainingTensors};
 pub use sequence::{Floor, Sequence, roundtrip_floor};
+pub use stats::Stats;
 pub(crate) use tensors::channels_first;
 pub use tensors::{
-    Normalization, ShardInfo, SplitInfo, Stats, TemplateInfo, TensorManifest, TensorOptions,
+    Normalization, ShardInfo, SplitInfo, TemplateInfo, TensorManifest, TensorOptions,
     body_input_maps, write_tensors,
 };
