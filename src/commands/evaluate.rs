@@ -85,7 +85,8 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     bar.finish_and_clear();
     let asked =
         json!({"splits": args.splits, "max_sequences": args.max_sequences, "data": args.data});
-    let output = document(&results, model_json, &settings, asked);
+    let rows = aggregate(&results);
+    let output = document(&results, &rows, model_json, &settings, asked);
     if let Some(path) = &args.json {
         write_json(path, &output)?;
     }
@@ -99,7 +100,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         report::write(dir, &output, &results, &pictures)
             .with_context(|| format!("writing the report in {}", dir.display()))?;
     }
-    let (splits, _) = aggregate(&results);
+    let splits = &rows.0;
     println!(
         "evaluate: {} sequences of {} splits in {:.1} s ({} reused from the cache)",
         results.len(),
@@ -107,6 +108,6 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         started.elapsed().as_secs_f64(),
         reused
     );
-    print!("{}", text_table(&splits));
+    print!("{}", text_table(splits));
     Ok(())
 }

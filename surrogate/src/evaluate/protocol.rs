@@ -14,7 +14,7 @@ use serde_json::{Value, json};
 use sim::dataset::ManifestRecord;
 
 use super::baselines::{self, Baseline, FloorMaps};
-use super::tables::{SequenceResult, aggregate, paper_numbers};
+use super::tables::{Rows, SequenceResult, paper_numbers};
 use super::{Method, Truth};
 use crate::data::Sequence;
 use crate::error::{Error, Result, file_error};
@@ -113,16 +113,17 @@ pub fn fingerprint(
 }
 
 /// The whole of an evaluation as `evaluate --json` writes it: the rows of every split and the
-/// simulation's ([`aggregate`]), every sequence's result, the model ([`describe_model`]), the
-/// settings (`settings`, to which the sampler's and the protocol are added), the units and
-/// the paper's numbers.
+/// simulation's (`rows`, [`super::tables::aggregate`] of `results`), every sequence's result, the model
+/// ([`describe_model`]), the settings (`settings`, to which the sampler's and the protocol are
+/// added), the units and the paper's numbers.
 pub fn document(
     results: &[SequenceResult],
+    rows: &Rows,
     model: Value,
     sampler: &Settings,
     mut settings: Value,
 ) -> Value {
-    let (splits, simulation) = aggregate(results);
+    let (splits, simulation) = rows;
     for (key, value) in [
         ("steps", json!(sampler.steps)),
         ("guidance", json!(sampler.guidance.weight)),

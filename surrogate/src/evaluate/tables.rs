@@ -33,6 +33,9 @@ pub struct SequenceResult {
 /// Per split: the mean row of every method.
 pub type SplitRows = BTreeMap<String, BTreeMap<Method, MethodScores>>;
 
+/// The rows of every split and method, and the simulation's per split ([`aggregate`]).
+pub type Rows = (SplitRows, BTreeMap<String, MethodScores>);
+
 /// The short table `evaluate` prints: one line per split and method.
 pub fn text_table(splits: &SplitRows) -> String {
     let mut text = format!(
@@ -58,7 +61,7 @@ pub fn text_table(splits: &SplitRows) -> String {
 }
 
 /// The mean rows of every split and method, and the simulation's per split.
-pub fn aggregate(results: &[SequenceResult]) -> (SplitRows, BTreeMap<String, MethodScores>) {
+pub fn aggregate(results: &[SequenceResult]) -> Rows {
     let mut rows: BTreeMap<String, BTreeMap<Method, Vec<MethodScores>>> = BTreeMap::new();
     let mut simulation: BTreeMap<String, Vec<MethodScores>> = BTreeMap::new();
     for r in results {
