@@ -107,6 +107,14 @@ pub struct SolverParams {
     pub max_retries: usize,
     /// A vertex faster than this (m/s) counts as an explosion. Default 50.
     pub max_speed: f64,
+    /// The most the deepest penetration into the body (away from the body's own overlaps) may
+    /// grow in one frame, m. A frame that deepens it more is run again with twice the
+    /// substeps (up to `max_retries` times, while each retry ends shallower), and the
+    /// shallowest attempt is kept: a limb that sweeps past light cloth in one substep leaves it
+    /// inside (docs/BENCHMARKS.md, the soft-cloth blow-up). 0 turns the check off. Default
+    /// 0.01.
+    #[serde(default = "default_max_penetration_jump")]
+    pub max_penetration_jump: f64,
     /// Cloth-cloth contact (vertex against triangle of the same cloth). Off in this plain
     /// default; garment scenes turn it on (`--no-self-contact` turns it off).
     #[serde(default)]
@@ -134,6 +142,10 @@ fn default_self_friction() -> f64 {
     0.3
 }
 
+fn default_max_penetration_jump() -> f64 {
+    0.01
+}
+
 impl Default for SolverParams {
     fn default() -> Self {
         Self {
@@ -147,6 +159,7 @@ impl Default for SolverParams {
             gravity: 9.81,
             max_retries: 3,
             max_speed: 50.0,
+            max_penetration_jump: default_max_penetration_jump(),
             self_contact: false,
             self_contact_distance: default_self_contact_distance(),
             self_friction: default_self_friction(),
@@ -205,6 +218,7 @@ impl SolverParams {
             ("solver.air_damping", self.air_damping),
             ("solver.gravity", self.gravity),
             ("solver.max_speed", self.max_speed),
+            ("solver.max_penetration_jump", self.max_penetration_jump),
             ("solver.self_contact_distance", self.self_contact_distance),
             ("solver.self_friction", self.self_friction),
         ] {
@@ -247,13 +261,14 @@ impl SolverParams {
 }
 
 /// Largest substep or iteration count a configuration may ask for (larger values are typos
-/// The most substeps times iterations per frame (the 4 x 16 default is 64).
-pub const MAX_STEP_WORK: usize = 65_536;
-/// The widest gap self-contact may keep between layers, m.
-pub const MAX_SELF_CONTACT_DISTANCE_M: f64 = 0.05;
-
 /// that would run for days).
 pub const MAX_STEP_COUNT: usize = 4096;
+
+/// The most substeps times iterations per frame (the 4 x 16 default is 64).
+pub const MAX_STEP_WORK: usize = 65_536;
+
+/// The widest gap self-contact may keep between layers, m.
+pub const MAX_SELF_CONTACT_DISTANCE_M: f64 = 0.05;
 
 /// The most past iterations Anderson acceleration mixes in.
 pub const MAX_ACCELERATION: usize = 8;

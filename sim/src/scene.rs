@@ -458,14 +458,36 @@ impl Scene {
                 &body.vertices,
                 model.faces(),
             ));
-            let report = solver.advance_frame(&mut state, &mut obstacles, t0, k)?;
-            steps += report.steps;
-            iterations += report.iterations;
-            summary.deep_contacts += report.deep_contacts;
+            let deepest_before = stats.max_penetration_m;
+            let jump = self.config.solver.max_penetration_jump;
+            let saved = state.clone();
+            let mut report = solver.advance_frame(&mut state, &mut obstacles, t0, k)?;
+            // The attempt kept so far when the frame took the cloth too deep (the shallowest).
+            let mut kept: Option<(ClothState, FrameStats)> = None;
+            loop {
+                steps += report.steps;
+                iterations += report.iterations;
+                summary.deep_contacts += report.deep_contacts;
+                let wall = frame_started.elapsed().as_secs_f64();
+                let body_obstacle = scene_body(&mut obstacles)?;
+                stats = self.measure(&mesh, &state, &solver, body_obstacle, k, report, wall);
+                let depth = stats.max_penetration_m;
+                if let Some(shallower) = kept.take_if(|(_, s)| s.max_penetration_m <= depth) {
+                    // Finer steps did not help: keep the shallower attempt and stop.
+                    (state, stats) = shallower;
+                    break;
+                }
+                let deepened = jump > 0.0 && depth - deepest_before > jump;
+                if !deepened || report.retries >= self.config.solver.max_retries {
+                    break;
+                }
+                // A limb swept the cloth inside within this frame: run it again, finer.
+                kept = Some((std::mem::replace(&mut state, saved.clone()), stats));
+                let finer = report.retries + 1;
+                report = solver.advance_frame_from(&mut state, &mut obstacles, t0, k, finer)?;
+            }
+            // The last attempt's retry count (any frame-level retry makes it positive).
             summary.retried_frames += (report.retries > 0) as usize;
-            let wall = frame_started.elapsed().as_secs_f64();
-            let body_obstacle = scene_body(&mut obstacles)?;
-            stats = self.measure(&mesh, &state, &solver, body_obstacle, k, report, wall);
             accumulate(&mut summary, &stats);
             for (g, p) in garment.iter_mut().zip(&state.positions) {
                 *g = [p.x, p.y, p.z];

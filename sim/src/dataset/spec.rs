@@ -135,6 +135,9 @@ pub struct SolverSpec {
     pub self_friction: f64,
     /// Anderson acceleration depth (0 = off, the default).
     pub acceleration: usize,
+    /// The most the penetration may deepen in one frame before the frame is run again with
+    /// twice the substeps, m (0 = off).
+    pub max_penetration_jump: f64,
 }
 
 impl Default for SolverSpec {
@@ -147,6 +150,7 @@ impl Default for SolverSpec {
             self_contact_distance: plain.self_contact_distance,
             self_friction: plain.self_friction,
             acceleration: crate::config::garment_solver().acceleration,
+            max_penetration_jump: plain.max_penetration_jump,
         }
     }
 }
@@ -394,6 +398,12 @@ impl DatasetSpec {
             return Err(format!(
                 "solver.self_friction = {} is outside [0, 2]",
                 v.self_friction
+            ));
+        }
+        if !(v.max_penetration_jump.is_finite() && v.max_penetration_jump >= 0.0) {
+            return Err(format!(
+                "solver.max_penetration_jump = {} m must be finite and non-negative",
+                v.max_penetration_jump
             ));
         }
         for (key, x) in [

@@ -219,6 +219,7 @@ impl Synthesis<'_> {
                 self_contact_distance: solver.self_contact_distance,
                 self_friction: solver.self_friction,
                 acceleration: solver.acceleration,
+                max_penetration_jump: solver.max_penetration_jump,
                 ..SolverParams::default()
             },
             record: crate::config::RecordConfig::default(),

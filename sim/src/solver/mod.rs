@@ -324,9 +324,22 @@ impl Solver {
         t0: f64,
         frame: usize,
     ) -> Result<FrameReport> {
+        self.advance_frame_from(state, obstacles, t0, frame, 0)
+    }
+
+    /// [`Self::advance_frame`] starting at retry `first_retry` (`substeps << first_retry`
+    /// steps): how a caller whose own check rejected the frame runs it again, finer.
+    pub fn advance_frame_from(
+        &mut self,
+        state: &mut ClothState,
+        obstacles: &mut Obstacles,
+        t0: f64,
+        frame: usize,
+        first_retry: usize,
+    ) -> Result<FrameReport> {
         let saved = state.clone();
         let mut reason = String::new();
-        for retry in 0..=self.params.max_retries {
+        for retry in first_retry..=self.params.max_retries {
             let substeps = self.params.substeps << retry;
             self.system_for(substeps)?;
             let h = self.frame_dt / substeps as f64;
