@@ -301,5 +301,9 @@ mod tests {
         let config = SceneConfig::from_toml("settle_frames = 4000000000\n", "s").unwrap();
         let message = config.validate().unwrap_err().to_string();
         assert!(message.contains("settle_frames"), "{message}");
+        let text = "[solver]\nmax_penetration_jump = -0.01\n";
+        let config = SceneConfig::from_toml(text, "s").unwrap();
+        let message = config.validate().unwrap_err().to_string();
+        assert!(message.contains("solver.max_penetration_jump"), "{message}");
     }
 }

@@ -137,6 +137,10 @@ pub fn scenarios() -> Vec<Scenario> {
             run: contact::convergence,
         },
         Scenario {
+            name: "soft_cloth",
+            run: contact::soft_cloth,
+        },
+        Scenario {
             name: "determinism",
             run: dynamics::determinism,
         },
