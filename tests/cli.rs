@@ -555,6 +555,17 @@ fn regress_writes_the_checked_json() {
 }
 
 #[test]
+fn regress_names_a_long_only_scenario_and_an_unknown_one() {
+    let err = fails(&["regress", "--only", "soft_cloth"]);
+    assert!(err.contains("run only with --long"), "{err}");
+    let err = fails(&["regress", "--only", "no_such_scenario"]);
+    assert!(
+        err.contains("no scenario matches 'no_such_scenario'"),
+        "{err}"
+    );
+}
+
+#[test]
 fn garments_list_make_and_check() {
     let dir = tempfile::tempdir().unwrap();
     let list = dir.path().join("list.json");

@@ -21,6 +21,15 @@ pub fn run(args: &RegressArgs) -> Result<()> {
     }
     let outcomes = run_suite(args.long, &args.only)?;
     if outcomes.is_empty() {
+        let named = sim::regress::scenarios()
+            .iter()
+            .any(|s| s.name.contains(&args.only));
+        if named && !args.long {
+            bail!(
+                "the scenarios matching '{}' run only with --long",
+                args.only
+            );
+        }
         bail!("no scenario matches '{}'", args.only);
     }
     println!(
