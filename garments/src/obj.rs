@@ -252,14 +252,22 @@ pub fn write_ply<W: Write>(out: &mut W, garment: &Garment) -> std::io::Result<()
     Ok(())
 }
 
-/// Refuses face indices that point at no `v`, `vt` or `vn` line, naming the line. tobj checks
-/// positions itself but computes texture and normal offsets before its bounds check, which
-/// overflows (a panic in debug builds) on an index of 0 or one far out of range.
+/// Refuses text that is not UTF-8 and face indices that point at no `v`, `vt` or `vn` line,
+/// naming the line. tobj checks positions itself but computes texture and normal offsets
+/// before its bounds check, which overflows (a panic in debug builds) on an index of 0 or one
+/// far out of range. tobj refuses a line that is not UTF-8 only when it reaches it, after the
+/// lines before it, so such text is refused here before tobj reads any of it.
 fn check_face_indices(text: &[u8], name: &str) -> Result<()> {
-    // Text that is not UTF-8 is left to tobj, which refuses it.
-    let Ok(text) = std::str::from_utf8(text) else {
-        return Ok(());
-    };
+    let text = std::str::from_utf8(text).map_err(|e| {
+        let line = text[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        Error::Format {
+            path: name.to_string(),
+            message: format!("line {}: not UTF-8 text", line + 1),
+        }
+    })?;
     const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
     // Which element a line's first word declares: 0 `v`, 1 `vt`, 2 `vn`.
     let kind_of = |word: Option<&str>| match word {
@@ -342,6 +350,11 @@ mod tests {
                 "line 9",
                 "vertex",
             ),
+            (
+                &*format!("{square}f 1/1 2/-2222222222 3/3\n"),
+                "line 9",
+                "-2222222222",
+            ),
         ];
         for (text, line, what) in cases {
             let message = parse_obj(text.as_bytes(), "bad.obj", "bad")
@@ -353,6 +366,19 @@ mod tests {
                 "{message}"
             );
         }
+    }
+
+    #[test]
+    fn text_that_is_not_utf8_is_refused_by_line_before_tobj_reads_it() {
+        // The fuzzer's second find: an out-of-range texture index on line 9, and a byte that
+        // is not UTF-8 on line 10. tobj read line 9 before refusing line 10, and overflowed.
+        let text = b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                     f 1/1 2/-2222222222 3/3\nvt \x83 1\n";
+        let message = parse_obj(text, "bad.obj", "bad").unwrap_err().to_string();
+        assert!(
+            message.contains("bad.obj") && message.contains("line 10: not UTF-8"),
+            "{message}"
+        );
     }
 
     #[test]
