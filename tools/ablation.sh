@@ -9,6 +9,7 @@
 #   tools/ablation.sh tensors-designs DESIGNS OUT   # bounded tensors of specs/designs.toml's data (a5_*)
 #   tools/ablation.sh tensors-nearest DESIGNS OUT   # the same with the nearest-body inputs (a6_*)
 #   tools/ablation.sh tensors-kinds KINDS OUT       # bounded tensors of specs/kinds.toml's data (a7_*)
+#   tools/ablation.sh tensors-window8 DESIGNS OUT   # designs.toml's tensors with an 8-frame pose window (a8_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -30,6 +31,7 @@ tensors_of() {
     a5_*) echo designs ;;
     a6_*) echo nearest ;;
     a7_*) echo kinds ;;
+    a8_*) echo window8 ;;
     *) echo bounded ;;
   esac
 }
@@ -57,6 +59,12 @@ case "${1:-}" in
     data=$2 out=$3
     [ -f "$out/tensors-kinds/manifest.json" ] ||
       "$bin" dataset tensors "$data" --out "$out/tensors-kinds" --target lbs_residual --conditions bounded --quiet
+    ;;
+  tensors-window8)
+    data=$2 out=$3
+    [ -f "$out/tensors-window8/manifest.json" ] ||
+      "$bin" dataset tensors "$data" --out "$out/tensors-window8" --target lbs_residual --conditions bounded \
+        --window 8 --quiet
     ;;
   train)
     arm=$2 out=$3

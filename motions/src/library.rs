@@ -1,9 +1,10 @@
 //! The built-in motion library: procedural, parameterized motions at 30 fps.
 //!
 //! A motion is named `NAME` or `NAME:key=value,...` with the keys `speed` (tempo multiplier,
-//! default 1, range 0.25-3), `amplitude` (joint-angle multiplier, default 1, range 0-1.5) and
-//! `duration` (seconds, default per motion, at most 600). Variants of the same motion differ in
-//! these parameters, so training and held-out test sets can use different ones.
+//! default 1, range 0.25-3), `amplitude` (joint-angle multiplier, default 1, range 0-1.5),
+//! `duration` (seconds, default per motion, at most 600) and, for `random` only, `seed` (a
+//! whole number: which random motion). Variants of the same motion differ in these
+//! parameters, so training and held-out test sets can use different ones.
 //!
 //! Joint angles are smooth functions of time (sines and smooth bumps) within human ranges,
 //! eased in over the first 0.6 s so every motion starts from standing. The
@@ -33,7 +34,7 @@ pub struct MotionInfo {
 }
 
 /// The built-in motions.
-pub const MOTIONS: [MotionInfo; 10] = [
+pub const MOTIONS: [MotionInfo; 11] = [
     MotionInfo {
         name: "walk",
         description: "walking forward at about 1 m/s, arms swinging",
@@ -84,6 +85,11 @@ pub const MOTIONS: [MotionInfo; 10] = [
         description: "dance-like side-to-side sway with knee bounce and arm sway",
         default_duration: 6.0,
     },
+    MotionInfo {
+        name: "random",
+        description: "every joint group on its own smooth random course (`seed` picks which)",
+        default_duration: 6.0,
+    },
 ];
 
 /// A parsed motion request: a library name and its parameters.
@@ -97,6 +103,8 @@ pub struct MotionSpec {
     pub amplitude: f64,
     /// Duration, seconds.
     pub duration: f64,
+    /// Which random motion (`random` only; 0 for the others).
+    pub seed: u64,
 }
 
 impl MotionSpec {
@@ -116,11 +124,22 @@ impl MotionSpec {
             speed: 1.0,
             amplitude: 1.0,
             duration: info.default_duration,
+            seed: 0,
         };
         for kv in params.split(',').filter(|s| !s.trim().is_empty()) {
             let (k, v) = kv
                 .split_once('=')
                 .ok_or_else(|| unknown(format!("'{kv}' is not key=value")))?;
+            if k.trim() == "seed" {
+                if spec.name != "random" {
+                    return Err(unknown("only `random` takes a seed".into()));
+                }
+                spec.seed = v
+                    .trim()
+                    .parse()
+                    .map_err(|_| unknown(format!("seed '{v}' is not a whole number")))?;
+                continue;
+            }
             let value: f64 = v
                 .trim()
                 .parse()
@@ -131,7 +150,7 @@ impl MotionSpec {
                 "duration" => (&mut spec.duration, 1.0 / OUTPUT_FPS, 600.0),
                 other => {
                     return Err(unknown(format!(
-                        "unknown parameter '{other}' (speed, amplitude, duration)"
+                        "unknown parameter '{other}' (speed, amplitude, duration, seed)"
                     )));
                 }
             };
@@ -156,6 +175,9 @@ impl MotionSpec {
         if self.duration != info.default_duration {
             parts.push(format!("duration={}", self.duration));
         }
+        if self.seed != 0 {
+            parts.push(format!("seed={}", self.seed));
+        }
         if parts.is_empty() {
             self.name.clone()
         } else {
@@ -166,17 +188,16 @@ impl MotionSpec {
     /// Generates the motion at 30 fps for a body, planting the feet of that skeleton.
     pub fn generate(&self, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
         let count = (self.duration * OUTPUT_FPS).round().max(1.0) as usize;
+        let random = (self.name == "random").then(|| RandomMotion::new(self.seed));
         let frames: Vec<FramePose> = (0..count)
             .map(|k| {
                 let t = k as f64 / OUTPUT_FPS;
                 let mut b = PoseBuilder::default();
-                let lift = joint_angles(
-                    &self.name,
-                    t,
-                    self.speed,
-                    self.amplitude * ease_in(t),
-                    &mut b,
-                );
+                let a = self.amplitude * ease_in(t);
+                let lift = match &random {
+                    Some(random) => random.joint_angles(t, self.speed, a, &mut b),
+                    None => joint_angles(&self.name, t, self.speed, a, &mut b),
+                };
                 FramePose {
                     pose: b.pose(),
                     transl: [0.0, lift, 0.0],
@@ -446,6 +467,70 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
     }
 }
 
+/// The `random` motion: each joint group follows its own sum of two sines, with frequencies
+/// (0.2-0.8 Hz), phases and weights drawn from the seed, within human ranges. The scripted
+/// motions each move a few joint groups along one pattern (walking twists the spine 3
+/// degrees); a training set needs poses between and beyond them, as HOOD's random poses give
+/// it. Arms stay away from the torso (never lower than the standing 70 degrees) so the body
+/// does not pass through itself.
+struct RandomMotion {
+    /// One course per channel, in [-1, 1]: see [`RandomMotion::joint_angles`].
+    courses: [[(f64, f64, f64); 2]; RANDOM_CHANNELS],
+}
+
+/// Spine bend, twist and side bend; neck turn and nod; per side: arm lift, arm swing, elbow,
+/// hip flexion, knee.
+const RANDOM_CHANNELS: usize = 15;
+
+impl RandomMotion {
+    fn new(seed: u64) -> Self {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let courses = std::array::from_fn(|_| {
+            let weight: f64 = rng.random_range(0.3..0.7);
+            let mut term = |w: f64| {
+                let hz = rng.random_range(0.2..0.8);
+                let phase = rng.random_range(0.0..2.0 * PI);
+                (hz, phase, w)
+            };
+            [term(weight), term(1.0 - weight)]
+        });
+        Self { courses }
+    }
+
+    /// Sets the joint angles at time `t`; returns no lift (the feet stay on the ground).
+    fn joint_angles(&self, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> f64 {
+        let course = |c: usize| -> f64 {
+            self.courses[c]
+                .iter()
+                .map(|(hz, phase, w)| w * (2.0 * PI * hz * speed * t + phase).sin())
+                .sum()
+        };
+        // Degrees at amplitude 1, per spine joint (3 of them): bend forward 4 +- 6, twist +- 10,
+        // side bend +- 4.
+        for joint in [3, 6, 9] {
+            b.turn(joint, Axis::X, a * (4.0 + 6.0 * course(0)))
+                .turn(joint, Axis::Y, a * 10.0 * course(1))
+                .turn(joint, Axis::Z, a * 4.0 * course(2));
+        }
+        b.turn(12, Axis::Y, a * 15.0 * course(3))
+            .turn(12, Axis::X, a * 8.0 * course(4));
+        for (side, first) in [(Side::Left, 5), (Side::Right, 10)] {
+            let lift = 25.0 * (1.0 + course(first));
+            b.arm(
+                side,
+                70.0 - a * lift,
+                a * (10.0 + 30.0 * course(first + 1)),
+                15.0 + a * 35.0 * (1.0 + course(first + 2)),
+            );
+            let hip = 8.0 + 12.0 * course(first + 3);
+            let knee = 12.0 * (1.0 + course(first + 4));
+            b.leg(side, a * hip, a * knee, 0.0);
+        }
+        0.0
+    }
+}
+
 /// Softness of the stance-foot choice, metres: feet closer in height than this share the stance.
 const STANCE_SOFTNESS: f64 = 0.02;
 /// Width (frames) of the Gaussian that smooths the planted horizontal root velocity, so a
@@ -523,4 +608,53 @@ pub fn plant_feet(
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_parse_and_print_back() {
+        let spec = MotionSpec::parse("random:seed=3,speed=1.2").unwrap();
+        assert_eq!((spec.seed, spec.speed), (3, 1.2));
+        assert_eq!(spec.label(), "random:speed=1.2,seed=3");
+        assert_eq!(MotionSpec::parse(&spec.label()).unwrap(), spec);
+        assert_eq!(MotionSpec::parse("walk").unwrap().label(), "walk");
+        for (bad, why) in [
+            ("walk:seed=1", "only `random`"),
+            ("random:seed=1.5", "whole number"),
+            ("random:seed=-1", "whole number"),
+            ("walk:amplitude=2", "outside"),
+            ("walk:pace=1", "unknown parameter"),
+            ("fly", "built-in motions are"),
+        ] {
+            let message = MotionSpec::parse(bad).unwrap_err().to_string();
+            assert!(message.contains(why), "{bad}: {message}");
+        }
+    }
+
+    #[test]
+    fn a_random_motion_is_fixed_by_its_seed_and_moves_the_spine() {
+        let model = BodyModel::default_body();
+        let shaped = model.shape(&[]).unwrap();
+        let generate = |text: &str| {
+            MotionSpec::parse(text)
+                .unwrap()
+                .generate(&model, &shaped)
+                .unwrap()
+        };
+        let one = generate("random:seed=1");
+        assert_eq!(one.frames, generate("random:seed=1").frames);
+        assert_ne!(one.frames, generate("random:seed=2").frames);
+        // The spine twists (about y) more than walking's 3 degrees per joint somewhere.
+        let twist = |m: &Motion| {
+            m.frames
+                .iter()
+                .map(|f| f.pose[3 * 3 + 1].abs().to_degrees())
+                .fold(0.0, f64::max)
+        };
+        assert!(twist(&one) > 5.0, "{}", twist(&one));
+        assert!(twist(&generate("walk")) < 5.0);
+    }
 }

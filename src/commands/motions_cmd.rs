@@ -77,10 +77,10 @@ fn list(json_path: Option<&std::path::Path>) -> Result<()> {
             info.name, frames, spec.duration, info.description
         );
         rows.push(json!({"name": info.name, "frames": frames, "fps": 30.0, "duration_s": spec.duration, "description": info.description,
-            "parameters": {"speed": "tempo multiplier, 0.25-3, default 1", "amplitude": "joint-angle multiplier, 0-1.5, default 1", "duration": "seconds, default as listed"}}));
+            "parameters": {"speed": "tempo multiplier, 0.25-3, default 1", "amplitude": "joint-angle multiplier, 0-1.5, default 1", "duration": "seconds, default as listed", "seed": "random only: which random motion, a whole number, default 0"}}));
     }
     println!(
-        "\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6; AMASS .npz files are accepted wherever a motion is"
+        "\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6 (and random:seed=N); AMASS .npz files are accepted wherever a motion is"
     );
     if let Some(path) = json_path {
         write_json(path, &rows)?;
