@@ -328,6 +328,7 @@ fn motions_list_json_has_the_required_motions() {
         "turn",
         "kick",
         "sway",
+        "random",
     ] {
         assert!(
             names.contains(&required),
@@ -337,6 +338,28 @@ fn motions_list_json_has_the_required_motions() {
     for m in list.as_array().unwrap() {
         assert_eq!(m["fps"], 30.0);
         assert!(m["frames"].as_u64().unwrap() > 0);
+    }
+}
+
+#[test]
+fn a_closed_output_pipe_ends_quietly_not_in_a_panic() {
+    // As `dit-garment motions list | head -1` once did: the reader is gone before the first
+    // line is written.
+    for args in [
+        &["motions", "list"][..],
+        &["synth", "--example-spec", "tiny"],
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = common::binary()
+            .args(args)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+        assert!(stderr.is_empty(), "{args:?}: {stderr}");
     }
 }
 

@@ -41,7 +41,7 @@ pub fn run(args: &BodyArgs) -> Result<()> {
         files::write_with(out, |w| {
             garments::write_mesh_obj(w, &comment, &posed.vertices, model.faces())
         })?;
-        println!(
+        say!(
             "wrote {} ({} vertices, {} triangles, rest height {:.3} m, {} boundary edges)",
             out.display(),
             model.num_vertices(),

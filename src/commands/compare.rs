@@ -13,7 +13,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let c = compare_recordings(&args.a, &args.b, &model, args.seed)?;
     if args.per_frame {
         for (k, s) in &c.per_frame {
-            println!(
+            say!(
                 "frame {k:5}: {}",
                 s.values()
                     .iter()
@@ -23,18 +23,20 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             );
         }
     }
-    println!(
+    say!(
         "{} scored against {} ({} frames, every {FRAME_STRIDE}th):",
         args.b.display(),
         args.a.display(),
         c.per_frame.len()
     );
     for ((name, unit), v) in Scores::UNITS.iter().zip(c.mean.values()) {
-        println!("  {name:<11} {v:10.4}  {unit}");
+        say!("  {name:<11} {v:10.4}  {unit}");
     }
-    println!(
+    say!(
         "  jitter      {:10.4}  cm mean second difference over all {} frames (A: {:.4})",
-        c.jitter_b, c.frames, c.jitter_a
+        c.jitter_b,
+        c.frames,
+        c.jitter_a
     );
     if let Some(path) = &args.json {
         let mean = &c.mean;

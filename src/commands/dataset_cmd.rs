@@ -78,7 +78,7 @@ fn tensors(
         .with_context(|| format!("making tensors of {}", dir.display()))?;
     bar.finish_and_clear();
     let frames: usize = manifest.splits.values().map(|s| s.frames).sum();
-    println!(
+    say!(
         "tensors: {} sequences, {frames} frames of {} templates at {r} x {r} ({}, window {}, condition {} values) in {:.1} s",
         total,
         manifest.templates.len(),
@@ -89,20 +89,20 @@ fn tensors(
         r = manifest.resolution,
     );
     for (split, info) in &manifest.splits {
-        println!(
+        say!(
             "  {split}: {} frames of {} sequences in {} shards",
             info.frames,
             info.sequences,
             info.shards.len()
         );
     }
-    println!("  wrote {}", out.join("manifest.json").display());
+    say!("  wrote {}", out.join("manifest.json").display());
     Ok(())
 }
 
 fn verify(root: &Path, json: Option<&Path>) -> Result<()> {
     let found = sim::dataset::verify(root)?;
-    println!("verify {}: {found}", root.display());
+    say!("verify {}: {found}", root.display());
     if let Some(path) = json {
         write_json(path, &found)?;
     }
@@ -113,7 +113,7 @@ fn verify(root: &Path, json: Option<&Path>) -> Result<()> {
             root.display()
         );
     }
-    println!("  every checksum, schema, count and gate result checks out");
+    say!("  every checksum, schema, count and gate result checks out");
     Ok(())
 }
 
@@ -121,7 +121,7 @@ fn stats_cmd(root: &Path, json: Option<&Path>) -> Result<()> {
     let dir = DatasetDir::new(root);
     let (spec, _, records) = load(&dir)?;
     let s = stats(&records, sim::scene::FPS);
-    println!(
+    say!(
         "dataset '{}' in {}: {} sequences ({} failed, {} retried), {} frames = {:.2} hours at 30 fps",
         spec.name,
         root.display(),
@@ -131,7 +131,7 @@ fn stats_cmd(root: &Path, json: Option<&Path>) -> Result<()> {
         s.frames,
         s.hours
     );
-    print!("{s}");
+    say_part!("{s}");
     if let Some(path) = json {
         write_json(path, &s)?;
     }
@@ -140,7 +140,7 @@ fn stats_cmd(root: &Path, json: Option<&Path>) -> Result<()> {
 
 fn merge(out: &Path, roots: &[std::path::PathBuf]) -> Result<()> {
     let merged = sim::dataset::merge(out, roots)?;
-    println!(
+    say!(
         "merge: {merged} sequences from {} folders into {}",
         roots.len(),
         DatasetDir::new(out).manifest().display()

@@ -99,7 +99,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     summary["blend_frames"] = prepared.scene.config.blend_frames.into();
     summary["settle_frames"] = prepared.scene.config.settle_frames.into();
     summary["body_vertices"] = prepared.model.num_vertices().into();
-    print_summary(&prepared, &s, &summary);
+    print_summary(&prepared, &s, &summary)?;
     write_json(&out.join("summary.json"), &summary)?;
     if let Some(path) = &args.json {
         write_json(path, &summary)?;
@@ -160,10 +160,10 @@ fn predict_and_compare(
 }
 
 /// The short table the demo prints.
-fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Value) {
+fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Value) -> Result<()> {
     let predicted = summary.get("predicted");
     let config = &prepared.scene.config;
-    println!(
+    say!(
         "demo: '{}' ({} vertices) on the default body ({} vertices) through '{}': {} frames at 30 fps ({} blend-in + {} settle)",
         prepared.garment.name,
         s.vertices,
@@ -173,11 +173,16 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
         config.blend_frames,
         config.settle_frames
     );
-    println!(
+    say!(
         "  {:<10} {:>9} {:>8} {:>7} {:>7} {:>9}",
-        "", "frames/s", "wall s", "E_v cm", "E_c %", "pen. mm"
+        "",
+        "frames/s",
+        "wall s",
+        "E_v cm",
+        "E_c %",
+        "pen. mm"
     );
-    println!(
+    say!(
         "  {:<10} {:>9.1} {:>8.1} {:>7} {:>7} {:>9.1}",
         "simulated",
         s.frames_per_s,
@@ -191,7 +196,7 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
         let depth = p["max_penetration_m"]
             .as_f64()
             .map_or("-".to_string(), |d| format!("{:.1}", d * 1e3));
-        println!(
+        say!(
             "  {:<10} {:>9.1} {:>8.1} {:>7.2} {:>7.2} {:>9}",
             "predicted",
             f("frames_per_s"),
@@ -200,7 +205,7 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
             f("E_c"),
             depth,
         );
-        println!(
+        say!(
             "  the surrogate ({}, {} steps, guidance {}; {} in training) ran at {:.1}x the engine's speed",
             p["model"].as_str().unwrap_or("?"),
             p["steps"],
@@ -214,7 +219,7 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
         );
     }
     let path = |k: &str| summary[k].as_str().unwrap_or("?").to_string();
-    println!(
+    say!(
         "  wrote {}{}, OBJ frames, summary.json",
         path("recording"),
         predicted.map_or(String::new(), |p| format!(
@@ -222,7 +227,7 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
             p["recording"].as_str().unwrap_or("?")
         ))
     );
-    println!(
+    say!(
         "  pictures: {} and {}{}; viewer: {} (open it in a browser)",
         path("contact_sheet"),
         path("gif"),
@@ -233,4 +238,5 @@ fn print_summary(prepared: &Prepared, s: &sim::scene::RunSummary, summary: &Valu
         )),
         path("viewer")
     );
+    Ok(())
 }

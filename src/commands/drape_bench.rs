@@ -27,7 +27,7 @@ pub fn run(args: &DrapeBenchArgs) -> Result<()> {
     if let Some(path) = &args.json {
         write_json(path, &result)?;
     }
-    println!(
+    say!(
         "drape-bench n={}: 2 s simulated in {:.2} s wall ({:.2}x real time), {} vertices inside the sphere, max edge stretch {:.4}, p99 {:.4}, drape area ratio {:.3}, lowest point {:.3} m",
         r.n,
         r.t_sim_2s_wall_s,
@@ -38,6 +38,6 @@ pub fn run(args: &DrapeBenchArgs) -> Result<()> {
         m.drape_proxy,
         m.lowest_z_m
     );
-    println!("  wrote {}", npy.display());
+    say!("  wrote {}", npy.display());
     Ok(())
 }

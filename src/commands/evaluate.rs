@@ -101,13 +101,13 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
             .with_context(|| format!("writing the report in {}", dir.display()))?;
     }
     let splits = &rows.0;
-    println!(
+    say!(
         "evaluate: {} sequences of {} splits in {:.1} s ({} reused from the cache)",
         results.len(),
         splits.len(),
         started.elapsed().as_secs_f64(),
         reused
     );
-    print!("{}", text_table(splits));
+    say_part!("{}", text_table(splits));
     Ok(())
 }

@@ -9,13 +9,6 @@ use motions::BodyModel;
 
 use crate::cli::GarmentsCommand;
 
-/// println! that reports a closed pipe as an error instead of panicking.
-macro_rules! say {
-    ($($arg:tt)*) => {{
-        use std::io::Write;
-        writeln!(std::io::stdout().lock(), $($arg)*)?;
-    }};
-}
 use files::write_json;
 
 /// Runs a `garments` subcommand.

@@ -1,5 +1,22 @@
 //! One module per subcommand; each turns parsed flags into a run.
 
+/// `println!` that returns a closed pipe (`| head`) as an error, which `main` ends quietly,
+/// instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        writeln!(std::io::stdout().lock(), $($arg)*)?;
+    }};
+}
+
+/// [`say!`] without the line end, as `print!`.
+macro_rules! say_part {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        write!(std::io::stdout().lock(), $($arg)*)?;
+    }};
+}
+
 mod body;
 mod compare;
 mod dataset_cmd;

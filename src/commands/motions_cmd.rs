@@ -44,7 +44,7 @@ pub fn run(command: MotionsCommand) -> Result<()> {
             let software = format!("dit-garment {}", env!("CARGO_PKG_VERSION"));
             let m = write_body_sequence(&out, &model, &betas, &motion, blend, &software)?;
             let bytes = std::fs::metadata(&out)?.len();
-            println!(
+            say!(
                 "wrote {} ({} frames at {} fps, {} vertices, {:.1} MB)",
                 out.display(),
                 m.frames,
@@ -64,22 +64,27 @@ pub fn run(command: MotionsCommand) -> Result<()> {
 }
 
 fn list(json_path: Option<&std::path::Path>) -> Result<()> {
-    println!(
+    say!(
         "{:<15} {:>6} {:>9}  description",
-        "name", "frames", "seconds"
+        "name",
+        "frames",
+        "seconds"
     );
     let mut rows = Vec::new();
     for info in MOTIONS {
         let spec = MotionSpec::parse(info.name)?;
         let frames = (spec.duration * 30.0).round() as usize;
-        println!(
+        say!(
             "{:<15} {:>6} {:>9.2}  {}",
-            info.name, frames, spec.duration, info.description
+            info.name,
+            frames,
+            spec.duration,
+            info.description
         );
         rows.push(json!({"name": info.name, "frames": frames, "fps": 30.0, "duration_s": spec.duration, "description": info.description,
             "parameters": {"speed": "tempo multiplier, 0.25-3, default 1", "amplitude": "joint-angle multiplier, 0-1.5, default 1", "duration": "seconds, default as listed", "seed": "random only: which random motion, a whole number, default 0"}}));
     }
-    println!(
+    say!(
         "\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6 (and random:seed=N); AMASS .npz files are accepted wherever a motion is"
     );
     if let Some(path) = json_path {
@@ -101,18 +106,18 @@ fn show(
     );
     let travel: [f64; 3] = std::array::from_fn(|k| last[k] - first[k]);
     let max_angle = motion.max_joint_angles_deg();
-    println!("motion    {}", motion.name);
+    say!("motion    {}", motion.name);
     let (frames, fps, duration) = (motion.len(), motion.fps, motion.duration());
-    println!("frames    {frames} at {fps} fps ({duration:.2} s)");
+    say!("frames    {frames} at {fps} fps ({duration:.2} s)");
     let [x, y, z] = travel;
-    println!("root      travel x {x:+.3} y {y:+.3} z {z:+.3} m");
-    println!("joint rotation ranges (degrees from the T-pose, max over frames):");
+    say!("root      travel x {x:+.3} y {y:+.3} z {z:+.3} m");
+    say!("joint rotation ranges (degrees from the T-pose, max over frames):");
     for (name, deg) in JOINT_NAMES
         .iter()
         .zip(&max_angle)
         .filter(|(_, d)| **d > 0.5)
     {
-        println!("  {name:<15} {deg:>6.1}");
+        say!("  {name:<15} {deg:>6.1}");
     }
     if let Some(path) = json_path {
         let summary = json!({

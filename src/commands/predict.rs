@@ -81,7 +81,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
             }),
         )?;
     }
-    println!(
+    say!(
         "predict: '{}' ({} vertices{}) through '{}': {} frames in {:.1} s ({:.1} frames/s, {} steps, guidance {})",
         garment.name,
         p.vertices,
@@ -97,7 +97,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         settings.steps,
         settings.guidance.weight,
     );
-    println!(
+    say!(
         "  E_c {:.2}% of surface samples inside the body, max penetration {:.1} mm{}; wrote {}",
         p.e_c,
         max_penetration.unwrap_or(f64::NAN) * 1e3,

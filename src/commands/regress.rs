@@ -15,7 +15,7 @@ pub fn run(args: &RegressArgs) -> Result<()> {
             bail!("--bless needs a non-empty --reason");
         }
         for path in sim::regress::bless(reason)? {
-            println!("blessed {}", path.display());
+            say!("blessed {}", path.display());
         }
         return Ok(());
     }
@@ -32,18 +32,21 @@ pub fn run(args: &RegressArgs) -> Result<()> {
         }
         bail!("no scenario matches '{}'", args.only);
     }
-    println!(
+    say!(
         "{:<40} {:>12} {:>12} {:>11}  result  unit",
-        "scenario", "expected", "measured", "tolerance"
+        "scenario",
+        "expected",
+        "measured",
+        "tolerance"
     );
     for o in &outcomes {
-        println!("{o}");
+        say!("{o}");
     }
     if let Some(path) = &args.json {
         write_json(path, &json!({ "scenarios": outcomes, "long": args.long }))?;
     }
     let passed = outcomes.iter().filter(|o| o.pass).count();
-    println!("{passed} of {} scenarios pass", outcomes.len());
+    say!("{passed} of {} scenarios pass", outcomes.len());
     let failed = outcomes.len() - passed;
     if failed > 0 {
         bail!("{failed} scenario(s) failed");

@@ -76,7 +76,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &mut progress,
     )
     .with_context(|| format!("rendering {}", args.recording.display()))?;
-    println!(
+    say!(
         "render: {} pictures of {} in {:.2} s ({:.0} ms each, {} garment pixels in the first); contact sheet {}{}",
         r.pictures,
         args.recording.display(),
@@ -115,7 +115,7 @@ pub fn view(args: &ViewArgs) -> Result<()> {
         &args.out,
     )?;
     let bytes = std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0);
-    println!(
+    say!(
         "view: wrote {} ({:.1} MB, {} recording{}) in {:.1} s; open it in a browser",
         args.out.display(),
         bytes as f64 / 1e6,

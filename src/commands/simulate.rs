@@ -29,7 +29,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if let Some(path) = &args.json {
         write_json(path, &summary_json(&s, out))?;
     }
-    println!(
+    say!(
         "simulate: '{}' ({} vertices) on '{}' through '{}': {} frames in {:.1} s ({:.1} frames/s)",
         prepared.garment.name,
         s.vertices,
@@ -39,6 +39,6 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         s.wall_s,
         s.frames_per_s
     );
-    println!("  {s}; wrote {}", out.display());
+    say!("  {s}; wrote {}", out.display());
     Ok(())
 }

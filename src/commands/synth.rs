@@ -35,7 +35,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         bail!("--jobs {jobs}: at most {max}");
     }
     if let Some(which) = &args.example_spec {
-        print!(
+        say_part!(
             "{}",
             if which == "paper" {
                 PAPER_SPEC
@@ -83,7 +83,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     let ids: Vec<&str> = mine.iter().map(|p| p.id.as_str()).collect();
     let leftovers = dir.remove_leftovers(&ids)?;
     let (mut known, todo) = split_finished(&dir, &mine);
-    println!(
+    say!(
         "synth '{}': {} sequences planned, shard {k}/{n} has {}, {} already done{}",
         spec.name,
         planned.len(),
@@ -171,13 +171,13 @@ pub fn run(args: &SynthArgs) -> Result<()> {
         "sequences_per_hour": per_hour, "jobs": jobs,
         "manifest": (missing == 0).then(|| dir.manifest()),
     });
-    println!(
+    say!(
         "synth: {simulated} sequences simulated ({failed} failed their gates), {frames} frames in {wall:.1} s ({frames_per_s:.1} frames/s, {per_hour:.0} sequences/h, {jobs} jobs)",
     );
     if missing == 0 {
-        println!("  wrote {}", dir.manifest().display());
+        say!("  wrote {}", dir.manifest().display());
     } else {
-        println!(
+        say!(
             "  {missing} sequences of other shards are not done yet; when all shards finish, run `dit-garment dataset merge {} {}`",
             dir.root.display(),
             dir.root.display()

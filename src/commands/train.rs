@@ -44,7 +44,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     config.fit_to(&tensors);
     config.validate()?;
     if args.print_config {
-        print!("{}", config.to_toml());
+        say_part!("{}", config.to_toml());
         return Ok(());
     }
     drop(tensors);
@@ -73,16 +73,18 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             bar.set_length(steps as u64);
             bar.set_position(step as u64);
             bar.reset_eta();
-            bar.suspend(|| {
+            // A closed pipe here is met again by the run's last line, which reports it.
+            let _ = bar.suspend(|| -> Result<()> {
                 if let Some(before) = extended_from {
-                    println!(
+                    say!(
                         "extending the run from {before} to {steps} steps: the learning rate from step {step} on follows the {steps}-step schedule"
                     );
                 }
-                println!(
+                say!(
                     "training {parameters} parameters on {train_frames} frames ({val_frames} of {} for validation), steps {step}..{steps}",
                     val_split.as_deref().unwrap_or("no held-out split")
-                )
+                );
+                Ok(())
             });
         }
         Event::Step { step, loss } => {
@@ -99,7 +101,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     })
     .with_context(|| format!("training into {}", args.out.display()))?;
     bar.finish_and_clear();
-    println!(
+    say!(
         "trained {} steps in {:.1} s ({:.2} samples/s): final loss {:.4}, best validation loss {}; weights in {}",
         summary.steps,
         summary.wall_s,

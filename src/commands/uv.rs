@@ -128,7 +128,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
     let sheet = args.out.join("contact_sheet.png");
     save_png(&sheet, &contact_sheet(&tiles, 3))?;
     summary["contact_sheet"] = json!(sheet);
-    println!(
+    say!(
         "uv: '{}' at {r} x {r}: {} vertices, {} UV corners, {} charts, coverage {:.2}, texel {:.2} cm{}",
         args.source,
         template.positions.len(),
@@ -138,7 +138,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
         texel_cm,
         floor_line
     );
-    println!("  wrote {}", sheet.display());
+    say!("  wrote {}", sheet.display());
     if let Some(path) = &args.json {
         write_json(path, &summary)?;
     }
