@@ -10,6 +10,7 @@
 #   tools/ablation.sh tensors-nearest DESIGNS OUT   # the same with the nearest-body inputs (a6_*)
 #   tools/ablation.sh tensors-kinds KINDS OUT       # bounded tensors of specs/kinds.toml's data (a7_*)
 #   tools/ablation.sh tensors-window8 DESIGNS OUT   # designs.toml's tensors with an 8-frame pose window (a8_*)
+#   tools/ablation.sh tensors-motions MOTIONS OUT   # bounded tensors of specs/motions.toml's data (a9_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -32,6 +33,7 @@ tensors_of() {
     a6_*) echo nearest ;;
     a7_*) echo kinds ;;
     a8_*) echo window8 ;;
+    a9_*) echo motions ;;
     *) echo bounded ;;
   esac
 }
@@ -66,6 +68,11 @@ case "${1:-}" in
       "$bin" dataset tensors "$data" --out "$out/tensors-window8" --target lbs_residual --conditions bounded \
         --window 8 --quiet
     ;;
+  tensors-motions)
+    data=$2 out=$3
+    [ -f "$out/tensors-motions/manifest.json" ] ||
+      "$bin" dataset tensors "$data" --out "$out/tensors-motions" --target lbs_residual --conditions bounded --quiet
+    ;;
   train)
     arm=$2 out=$3
     run="$out/runs/$arm"
@@ -94,7 +101,7 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,21p' "$0"
+    sed -n '2,22p' "$0"
     exit 2
     ;;
 esac
