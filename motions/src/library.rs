@@ -470,9 +470,9 @@ fn joint_angles(name: &str, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> 
 /// The `random` motion: each joint group follows its own sum of two sines, with frequencies
 /// (0.2-0.8 Hz), phases and weights drawn from the seed, within human ranges. The scripted
 /// motions each move a few joint groups along one pattern (walking twists the spine 3
-/// degrees); a training set needs poses between and beyond them, as HOOD's random poses give
-/// it. Arms stay away from the torso (never lower than the standing 70 degrees) so the body
-/// does not pass through itself.
+/// degrees); a training set needs poses between and beyond them, as a large motion-capture
+/// collection (AMASS) would give it. Arms stay away from the torso (never lower than the
+/// standing 70 degrees) so the body does not pass through itself.
 struct RandomMotion {
     /// One course per channel, in [-1, 1]: see [`RandomMotion::joint_angles`].
     courses: [[(f64, f64, f64); 2]; RANDOM_CHANNELS],
