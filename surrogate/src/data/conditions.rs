@@ -395,15 +395,21 @@ mod tests {
         );
     }
 
-    /// The shipped model's manifest predates the stored layout: its layout is inferred from
-    /// its blocks, and once stored, the stored one is read back whatever the body says.
+    /// A manifest stores its layout; one written before the layout was stored (before
+    /// 2026-12-04) lacks it and infers it from its blocks, which gives the same layout; once
+    /// stored, the stored one is read back whatever the body says.
     #[test]
     fn a_manifest_stores_its_layout_and_an_older_one_infers_it() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/weights/tensors.json");
         let text = std::fs::read_to_string(path).unwrap();
-        let old: crate::data::TensorManifest = serde_json::from_str(&text).unwrap();
-        assert!(old.condition_layout.is_none());
-        let inferred = old.condition_layout(10);
+        let stored: crate::data::TensorManifest = serde_json::from_str(&text).unwrap();
+        let layout = stored
+            .condition_layout
+            .expect("the shipped model's manifest stores its layout");
+        let mut old = stored.clone();
+        old.condition_layout = None;
+        let inferred = old.condition_layout(layout.betas);
+        assert_eq!(inferred, layout);
         assert_eq!(inferred.scaling, ConditionScaling::Bounded);
         assert_eq!(inferred.dim(), old.condition_dim);
         let named = |blocks: &[Block]| -> Vec<(String, usize, usize)> {
@@ -413,15 +419,9 @@ mod tests {
                 .collect()
         };
         assert_eq!(named(&inferred.blocks()), named(&old.condition));
-        let mut new = old.clone();
-        new.condition_layout = Some(inferred);
         let back: crate::data::TensorManifest =
-            serde_json::from_str(&serde_json::to_string(&new).unwrap()).unwrap();
-        assert_eq!(back, new);
-        assert_eq!(
-            back.condition_layout(16),
-            inferred,
-            "the stored layout wins"
-        );
+            serde_json::from_str(&serde_json::to_string(&stored).unwrap()).unwrap();
+        assert_eq!(back, stored);
+        assert_eq!(back.condition_layout(16), layout, "the stored layout wins");
     }
 }
