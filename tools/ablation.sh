@@ -46,32 +46,17 @@ case "${1:-}" in
         "$bin" dataset tensors "$data" --out "$out/tensors-$c" --target lbs_residual --conditions "$c" --quiet
     done
     ;;
-  tensors-designs)
-    data=$2 out=$3
-    [ -f "$out/tensors-designs/manifest.json" ] ||
-      "$bin" dataset tensors "$data" --out "$out/tensors-designs" --target lbs_residual --conditions bounded --quiet
-    ;;
-  tensors-nearest)
-    data=$2 out=$3
-    [ -f "$out/tensors-nearest/manifest.json" ] ||
-      "$bin" dataset tensors "$data" --out "$out/tensors-nearest" --target lbs_residual --conditions bounded \
-        --body-nearest --quiet
-    ;;
-  tensors-kinds)
-    data=$2 out=$3
-    [ -f "$out/tensors-kinds/manifest.json" ] ||
-      "$bin" dataset tensors "$data" --out "$out/tensors-kinds" --target lbs_residual --conditions bounded --quiet
-    ;;
-  tensors-window8)
-    data=$2 out=$3
-    [ -f "$out/tensors-window8/manifest.json" ] ||
-      "$bin" dataset tensors "$data" --out "$out/tensors-window8" --target lbs_residual --conditions bounded \
-        --window 8 --quiet
-    ;;
-  tensors-motions)
-    data=$2 out=$3
-    [ -f "$out/tensors-motions/manifest.json" ] ||
-      "$bin" dataset tensors "$data" --out "$out/tensors-motions" --target lbs_residual --conditions bounded --quiet
+  tensors-designs | tensors-nearest | tensors-kinds | tensors-window8 | tensors-motions)
+    # Bounded lbs_residual tensors of the arm's dataset; the kind adds its one flag.
+    kind=${1#tensors-} data=$2 out=$3
+    extra=()
+    case "$kind" in
+      nearest) extra=(--body-nearest) ;;
+      window8) extra=(--window 8) ;;
+    esac
+    [ -f "$out/tensors-$kind/manifest.json" ] ||
+      "$bin" dataset tensors "$data" --out "$out/tensors-$kind" --target lbs_residual --conditions bounded \
+        "${extra[@]}" --quiet
     ;;
   train)
     arm=$2 out=$3
