@@ -508,10 +508,11 @@ impl RandomMotion {
         };
         // Degrees at amplitude 1, per spine joint (3 of them): bend forward 4 +- 6, twist +- 10,
         // side bend +- 4.
+        let (bend, twist, side_bend) = (course(0), course(1), course(2));
         for joint in [3, 6, 9] {
-            b.turn(joint, Axis::X, a * (4.0 + 6.0 * course(0)))
-                .turn(joint, Axis::Y, a * 10.0 * course(1))
-                .turn(joint, Axis::Z, a * 4.0 * course(2));
+            b.turn(joint, Axis::X, a * (4.0 + 6.0 * bend))
+                .turn(joint, Axis::Y, a * 10.0 * twist)
+                .turn(joint, Axis::Z, a * 4.0 * side_bend);
         }
         b.turn(12, Axis::Y, a * 15.0 * course(3))
             .turn(12, Axis::X, a * 8.0 * course(4));
