@@ -14,6 +14,7 @@
 #   tools/ablation.sh tensors-random14 DATA OUT     # the same of specs/random14.toml's data (a10_*)
 #   tools/ablation.sh tensors-random_wide DATA OUT  # the same of specs/random_wide.toml's data (a11_*)
 #   tools/ablation.sh tensors-random21 DATA OUT     # the same of specs/random21.toml's data (a12_*)
+#   tools/ablation.sh tensors-random28 DATA OUT     # the same of specs/random28.toml's data (a13_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -40,6 +41,7 @@ tensors_of() {
     a10_*) echo random14 ;;
     a11_*) echo random_wide ;;
     a12_*) echo random21 ;;
+    a13_*) echo random28 ;;
     *) echo bounded ;;
   esac
 }
@@ -52,7 +54,7 @@ case "${1:-}" in
         "$bin" dataset tensors "$data" --out "$out/tensors-$c" --target lbs_residual --conditions "$c" --quiet
     done
     ;;
-  tensors-designs | tensors-nearest | tensors-kinds | tensors-window8 | tensors-motions | tensors-random14 | tensors-random_wide | tensors-random21)
+  tensors-designs | tensors-nearest | tensors-kinds | tensors-window8 | tensors-motions | tensors-random14 | tensors-random_wide | tensors-random21 | tensors-random28)
     # Bounded lbs_residual tensors of the arm's dataset; the kind adds its one flag.
     kind=${1#tensors-} data=$2 out=$3
     extra=()
@@ -92,7 +94,7 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,25p' "$0"
+    sed -n '2,26p' "$0"
     exit 2
     ;;
 esac
