@@ -18,7 +18,8 @@
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
-#     shipped.toml's for every arm)
+#     shipped.toml's for a0-a8, while a9-a13's specs draw their own: score those on
+#     designs.toml's data for the shipped splits)
 #   tools/ablation.sh baselines DATA HELDOUT OUT                # the no-learning rows, once
 #
 # Environment: DIT_GARMENT_BIN (default target/release/dit-garment), ABLATION_STEPS (500, as
@@ -94,7 +95,7 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,26p' "$0"
+    sed -n '2,27p' "$0"
     exit 2
     ;;
 esac
