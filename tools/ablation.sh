@@ -11,10 +11,8 @@
 #   tools/ablation.sh tensors-kinds KINDS OUT       # bounded tensors of specs/kinds.toml's data (a7_*)
 #   tools/ablation.sh tensors-window8 DESIGNS OUT   # designs.toml's tensors with an 8-frame pose window (a8_*)
 #   tools/ablation.sh tensors-motions MOTIONS OUT   # bounded tensors of specs/motions.toml's data (a9_*)
-#   tools/ablation.sh tensors-random14 DATA OUT     # the same of specs/random14.toml's data (a10_*)
-#   tools/ablation.sh tensors-random_wide DATA OUT  # the same of specs/random_wide.toml's data (a11_*)
-#   tools/ablation.sh tensors-random21 DATA OUT     # the same of specs/random21.toml's data (a12_*)
-#   tools/ablation.sh tensors-random28 DATA OUT     # the same of specs/random28.toml's data (a13_*)
+#   tools/ablation.sh tensors-SPEC DATA OUT         # the same of specs/SPEC.toml's data, SPEC one of
+#     random14 (a10_*), random_wide (a11_*), random21 (a12_*), random28 (a13_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -95,7 +93,8 @@ case "${1:-}" in
       --quiet --json "$out/eval/baselines-heldout.json" --report "$out/eval/baselines-heldout"
     ;;
   *)
-    sed -n '2,27p' "$0"
+    # The usage: the comment block at the top of this file.
+    awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0"
     exit 2
     ;;
 esac
