@@ -12,11 +12,11 @@
 #   tools/ablation.sh tensors-window8 DESIGNS OUT   # designs.toml's tensors with an 8-frame pose window (a8_*)
 #   tools/ablation.sh tensors-motions MOTIONS OUT   # bounded tensors of specs/motions.toml's data (a9_*)
 #   tools/ablation.sh tensors-SPEC DATA OUT         # the same of specs/SPEC.toml's data, SPEC one of
-#     random14 (a10_*), random_wide (a11_*), random21 (a12_*), random28 (a13_*)
+#     random14 (a10_*), random_wide (a11_*), random21 (a12_*), random28 (a13_*), union (a14_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
-#     shipped.toml's for a0-a8, while a9-a13's specs draw their own: score those on
+#     shipped.toml's for a0-a8, while a9-a14's specs draw their own: score those on
 #     designs.toml's data for the shipped splits)
 #   tools/ablation.sh baselines DATA HELDOUT OUT                # the no-learning rows, once
 #
@@ -41,6 +41,7 @@ tensors_of() {
     a11_*) echo random_wide ;;
     a12_*) echo random21 ;;
     a13_*) echo random28 ;;
+    a14_*) echo union ;;
     *) echo bounded ;;
   esac
 }
@@ -53,7 +54,7 @@ case "${1:-}" in
         "$bin" dataset tensors "$data" --out "$out/tensors-$c" --target lbs_residual --conditions "$c" --quiet
     done
     ;;
-  tensors-designs | tensors-nearest | tensors-kinds | tensors-window8 | tensors-motions | tensors-random14 | tensors-random_wide | tensors-random21 | tensors-random28)
+  tensors-designs | tensors-nearest | tensors-kinds | tensors-window8 | tensors-motions | tensors-random14 | tensors-random_wide | tensors-random21 | tensors-random28 | tensors-union)
     # Bounded lbs_residual tensors of the arm's dataset; the kind adds its one flag.
     kind=${1#tensors-} data=$2 out=$3
     extra=()
