@@ -55,6 +55,11 @@ pub struct TrainConfig {
     pub grad_clip_norm: f64,
     /// Decay of the exponential moving average of the weights (the shipped weights).
     pub ema_decay: f64,
+    /// Stochastic weight averaging (Izmailov et al. 2018) from this step on: the learning rate
+    /// stays at its value there, and the shipped weights are the plain mean of every step's
+    /// weights since instead of the EMA, averaging over the iterates a constant rate keeps
+    /// apart rather than over the last, nearly still ones of a decay to zero. 0: off.
+    pub swa_start: usize,
     /// Rectified flow or regression at s = 1.
     pub objective: Objective,
     /// Start the final linear and the cross-attention projections at zero.
@@ -98,6 +103,7 @@ impl Default for TrainConfig {
             warmup_steps: 100,
             grad_clip_norm: 1.0,
             ema_decay: 0.999,
+            swa_start: 0,
             objective: Objective::Regression,
             zero_init: true,
             zero_outside: true,
@@ -176,6 +182,13 @@ impl TrainConfig {
                 return bad(key, &v, "must be a positive multiple of log_every");
             }
         }
+        if self.swa_start >= self.steps {
+            return bad(
+                "swa_start",
+                &self.swa_start,
+                "must be 0 (off) or below steps",
+            );
+        }
         if self.val_frames > 100_000 {
             return bad("val_frames", &self.val_frames, "must be at most 100000");
         }
@@ -183,8 +196,12 @@ impl TrainConfig {
     }
 
     /// The learning rate of `step` (0-based): linear warm-up, then cosine decay to zero at
-    /// `steps`.
+    /// `steps`, held from `swa_start` on where that is set.
     pub fn lr_at(&self, step: usize) -> f64 {
+        let step = match self.swa_start {
+            0 => step,
+            start => step.min(start),
+        };
         if step < self.warmup_steps {
             return self.lr * (step + 1) as f64 / self.warmup_steps as f64;
         }
@@ -392,5 +409,26 @@ mod tests {
         assert!((t.lr_at(10) - 1e-4).abs() < 1e-12);
         assert!((t.lr_at(60) - 5e-5).abs() < 1e-12);
         assert!(t.lr_at(110) < 1e-12);
+        let averaged = TrainConfig {
+            swa_start: 60,
+            ..t.clone()
+        };
+        assert_eq!(averaged.lr_at(9), t.lr_at(9));
+        assert_eq!(averaged.lr_at(60), t.lr_at(60));
+        assert_eq!(averaged.lr_at(109), t.lr_at(60));
+    }
+
+    #[test]
+    fn swa_must_start_before_the_end() {
+        let t = TrainConfig {
+            steps: 100,
+            swa_start: 100,
+            ..TrainConfig::default()
+        };
+        assert_eq!(
+            t.validate().unwrap_err().to_string(),
+            "training.swa_start = 100: must be 0 (off) or below steps"
+        );
+        assert!(TrainConfig { swa_start: 99, ..t }.validate().is_ok());
     }
 }

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 pub use batch::{Batch, Recipe, validation_batches};
 pub use checkpoint::RunState;
 use files::write_atomic;
-pub use optim::{clip_global_norm, ema_decay, update_ema};
+pub use optim::{average_decay, clip_global_norm, ema_decay, update_ema};
 pub use reference::save_reference;
 
 use crate::data::TrainingTensors;
@@ -298,7 +298,7 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
         let grad_norm = clip_global_norm(&model, &mut grads, t.grad_clip_norm);
         let lr = t.lr_at(step);
         model = optim.step(lr, model, grads);
-        ema = update_ema(ema, &model, ema_decay(t.ema_decay, step));
+        ema = update_ema(ema, &model, average_decay(t, step));
         state.step += 1;
         state.wall_s = wall_before + session.elapsed().as_secs_f64();
         (loss_sum, norm_sum, count) = (loss_sum + loss_value, norm_sum + grad_norm, count + 1);

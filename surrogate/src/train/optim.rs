@@ -7,6 +7,7 @@ use burn::optim::GradientsParams;
 use burn::prelude::*;
 
 use crate::model::Dit;
+use crate::run::TrainConfig;
 
 struct SquaredNorm<'a> {
     grads: &'a GradientsParams,
@@ -88,6 +89,19 @@ pub fn ema_decay(decay: f64, step: usize) -> f64 {
     decay.min((1.0 + step as f64) / (10.0 + step as f64))
 }
 
+/// The averaging decay of `step` (0-based): the EMA's, or from `swa_start` on `k / (k + 1)`
+/// at the k-th step since, which makes the running average the plain mean of those steps'
+/// weights (the first of them replaces the EMA).
+pub fn average_decay(training: &TrainConfig, step: usize) -> f64 {
+    match training.swa_start {
+        start if start > 0 && step >= start => {
+            let k = (step - start) as f64;
+            k / (k + 1.0)
+        }
+        _ => ema_decay(training.ema_decay, step),
+    }
+}
+
 /// One EMA update of `ema` (plain tensors) towards `model`.
 pub fn update_ema(ema: Dit, model: &Dit, decay: f64) -> Dit {
     let mut flat = Flatten(Vec::new());
@@ -102,7 +116,6 @@ pub fn update_ema(ema: Dit, model: &Dit, decay: f64) -> Dit {
 mod tests {
     use super::*;
     use crate::model::DitConfig;
-    use crate::run::TrainConfig;
     use burn::tensor::Distribution;
 
     #[test]
@@ -177,6 +190,43 @@ mod tests {
             ema_loss < 0.5 * start,
             "EMA loss {ema_loss:.4}, start {start:.4}"
         );
+    }
+
+    #[test]
+    fn swa_averages_the_weights_of_every_step_since_its_start() {
+        let device = Device::flex();
+        let _random = crate::seeded(&device, 9);
+        let config = crate::model::tests::tiny();
+        let training = TrainConfig {
+            steps: 10,
+            swa_start: 6,
+            ..TrainConfig::default()
+        };
+        let first = |m: &Dit| {
+            m.final_linear
+                .weight
+                .val()
+                .into_data()
+                .try_to_vec::<f32>()
+                .unwrap()
+        };
+        let mut average = Dit::new(&config, &device);
+        let mut sum = vec![0.0f64; first(&average).len()];
+        for step in 0..training.steps {
+            let model = Dit::new(&config, &device);
+            if step >= training.swa_start {
+                for (s, w) in sum.iter_mut().zip(first(&model)) {
+                    *s += f64::from(w);
+                }
+            }
+            average = update_ema(average, &model, average_decay(&training, step));
+        }
+        let n = (training.steps - training.swa_start) as f64;
+        for (a, s) in first(&average).into_iter().zip(sum) {
+            assert!((f64::from(a) - s / n).abs() < 1e-5, "{a} against {}", s / n);
+        }
+        // Before the start it is the EMA's decay.
+        assert_eq!(average_decay(&training, 5), ema_decay(0.999, 5));
     }
 
     #[test]
