@@ -585,3 +585,120 @@ fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
     let offsets = |i: usize| &inputs.texels[i * n + 9 * plane..i * n + 12 * plane];
     assert!(worst(offsets(0), offsets(1)) > 1e-3);
 }
+
+/// An ensemble folder of two runs (the fixture's and one trained with another seed) predicts
+/// the mean of their predictions where sampling is linear (no guidance), and a bad ensemble
+/// file is named: too few members, members trained on other tensors.
+#[test]
+fn an_ensemble_predicts_the_mean_of_its_members() {
+    let f = fixture();
+    let other = f.dir.join("run-seed1");
+    if !other.join("model.safetensors").exists() {
+        let config = f.dir.join("m-seed1.toml");
+        std::fs::write(&config, format!("{CONFIG}seed = 1\n")).unwrap();
+        let tensors = f.dir.join("tensors");
+        ok(&[
+            "train",
+            "--data",
+            s(&tensors),
+            "--out",
+            s(&other),
+            "--config",
+            s(&config),
+            "--threads",
+            "1",
+            "--quiet",
+        ]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let ensemble = dir.path().join("pair");
+    std::fs::create_dir_all(&ensemble).unwrap();
+    let members = |runs: &[&Path]| {
+        let names: Vec<String> = runs.iter().map(|r| format!("{:?}", s(r))).collect();
+        std::fs::write(
+            ensemble.join("ensemble.toml"),
+            format!("members = [{}]\n", names.join(", ")),
+        )
+        .unwrap();
+    };
+    let args = |model: &Path, out: &Path| -> Vec<String> {
+        [
+            "predict",
+            "--model",
+            s(model),
+            "--config-from",
+            s(&f.truth),
+            "--out",
+            s(out),
+            "--guidance",
+            "0",
+            "--guidance-refine",
+            "0",
+            "--quiet",
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |model: &Path, name: &str| {
+        let out = dir.path().join(name);
+        ok(&args(model, &out)
+            .iter()
+            .map(|a| a.as_str())
+            .collect::<Vec<_>>());
+        Recording::read(&out).unwrap().garment
+    };
+    members(&[&f.run, &other]);
+    let (a, b, pair) = (
+        run(&f.run, "a.mcap"),
+        run(&other, "b.mcap"),
+        run(&ensemble, "pair.mcap"),
+    );
+    let (mut apart, mut off) = (0.0f32, 0.0f32);
+    for ((a, b), pair) in a
+        .iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .zip(pair.iter().flatten())
+    {
+        for k in 0..3 {
+            apart = apart.max((a[k] - b[k]).abs());
+            off = off.max((pair[k] - 0.5 * (a[k] + b[k])).abs());
+        }
+    }
+    assert!(apart > 1e-4, "the two members predict alike ({apart} m)");
+    assert!(
+        off < 1e-5,
+        "the ensemble is {off} m from the mean of its members"
+    );
+
+    let out = dir.path().join("bad.mcap");
+    let failure = || {
+        let e = fails(
+            &args(&ensemble, &out)
+                .iter()
+                .map(|a| a.as_str())
+                .collect::<Vec<_>>(),
+        );
+        assert!(!out.exists(), "{} was written", out.display());
+        e
+    };
+    members(&[&f.run]);
+    let e = failure();
+    assert!(
+        e.contains("ensemble.toml") && e.contains("at least 2"),
+        "{e}"
+    );
+    let retrained = dir.path().join("other-tensors");
+    std::fs::create_dir_all(&retrained).unwrap();
+    for file in ["config.toml", "model.safetensors", "tensors.json"] {
+        std::fs::copy(other.join(file), retrained.join(file)).unwrap();
+    }
+    let manifest = std::fs::read_to_string(retrained.join("tensors.json")).unwrap();
+    std::fs::write(retrained.join("tensors.json"), format!("{manifest}\n")).unwrap();
+    members(&[&f.run, &retrained]);
+    let e = failure();
+    assert!(
+        e.contains("tensors.json") && e.contains("same tensors"),
+        "{e}"
+    );
+}

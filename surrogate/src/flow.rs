@@ -52,6 +52,9 @@ pub trait Velocity {
 pub struct Conditioned<'a> {
     /// The model.
     pub model: &'a Dit,
+    /// Further networks of one configuration whose outputs are averaged with `model`'s (an
+    /// ensemble's other members; empty for one model).
+    pub members: &'a [Dit],
     /// Position maps.
     pub position: Tensor<4>,
     /// Loss masks.
@@ -67,13 +70,23 @@ impl Velocity for Conditioned<'_> {
     fn velocity(&self, x: Tensor<4>, s: f64) -> Tensor<4> {
         let b = x.dims()[0];
         let time = Tensor::<1>::full([b], s as f32, &x.device());
-        let out = self.model.forward(
-            x.clone(),
-            self.position.clone(),
-            self.mask.clone(),
-            time,
-            self.conditions.clone(),
-        );
+        let forward = |model: &Dit| {
+            model.forward(
+                x.clone(),
+                self.position.clone(),
+                self.mask.clone(),
+                time.clone(),
+                self.conditions.clone(),
+            )
+        };
+        let mut out = forward(self.model);
+        for member in self.members {
+            out = out + forward(member);
+        }
+        let out = match self.members.len() {
+            0 => out,
+            n => out.div_scalar((n + 1) as f32),
+        };
         let out = if self.zero_outside && self.model.config.prediction == Prediction::Data {
             out * self.mask.clone().repeat_dim(1, 3)
         } else {
@@ -165,6 +178,36 @@ mod tests {
 
     fn worst(a: Tensor<4>, b: Tensor<4>) -> f32 {
         (a - b).abs().max().into_scalar::<f32>()
+    }
+
+    #[test]
+    fn an_ensemble_field_is_the_mean_of_its_members_fields() {
+        let device = Device::flex();
+        let _random = crate::seeded(&device, 5);
+        let config = crate::model::tests::tiny();
+        let (a, b) = (Dit::new(&config, &device), Dit::new(&config, &device));
+        let n = Distribution::Normal(0.0, 1.0);
+        let position = Tensor::<4>::random([2, config.texel_channels(), 32, 32], n, &device);
+        let conditions = Tensor::<2>::random([2, 5], n, &device);
+        let x = Tensor::<4>::random([2, 3, 32, 32], n, &device);
+        let field = |model: &Dit, members: &[Dit]| {
+            Conditioned {
+                model,
+                members,
+                position: position.clone(),
+                mask: Tensor::ones([2, 1, 32, 32], &device),
+                conditions: conditions.clone(),
+                zero_outside: true,
+            }
+            .velocity(x.clone(), 0.7)
+        };
+        let (alone_a, alone_b) = (field(&a, &[]), field(&b, &[]));
+        assert!(
+            worst(alone_a.clone(), alone_b.clone()) > 1e-3,
+            "two distinct members"
+        );
+        let pair = field(&a, std::slice::from_ref(&b));
+        assert!(worst(pair, (alone_a + alone_b).div_scalar(2.0)) < 1e-5);
     }
 
     #[test]

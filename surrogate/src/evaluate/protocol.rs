@@ -73,15 +73,25 @@ pub fn select(
 }
 
 /// What `evaluate` records of a model (`model` in its JSON: the run folder, the weights'
-/// SHA-256, target, resolution, configuration and the templates trained on), and the part of
+/// SHA-256 (an ensemble's members' too), target, resolution, configuration and the templates trained on), and the part of
 /// that which makes its predictions (the weights and their configuration, not the folder they
 /// are in) for the results' [`fingerprint`].
 pub fn describe_model(t: &TrainedModel) -> Result<(Value, Value)> {
-    let (sha, _) = files::sha256_file(&t.run.join("model.safetensors"))?;
-    let identity = json!({"weights_sha256": sha, "target": t.data.target.name(),
+    let mut shas = Vec::new();
+    for run in &t.networks {
+        shas.push(files::sha256_file(&run.join("model.safetensors"))?.0);
+    }
+    let mut identity = json!({"weights_sha256": shas[0], "target": t.data.target.name(),
         "resolution": t.data.resolution, "config": t.config});
+    if shas.len() > 1 {
+        // An ensemble: every member's weights make its predictions.
+        identity["members_weights_sha256"] = json!(shas[1..]);
+    }
     let mut described = identity.clone();
     described["run"] = json!(t.run);
+    if t.networks.len() > 1 {
+        described["members"] = json!(t.networks);
+    }
     described["trained_on"] = t
         .data
         .templates

@@ -533,6 +533,7 @@ impl<'a> Predictor<'a> {
         let texel_channels = self.trained.config.model.texel_channels();
         let field = Conditioned {
             model: &self.trained.model,
+            members: &self.trained.members,
             position: tensor(&inputs.texels).reshape([b, texel_channels, r, r]),
             mask: tensor(&repeat(&garment.mask)).reshape([b, 1, r, r]),
             conditions: tensor(&inputs.conditions).reshape([b, dim]),

@@ -1,15 +1,18 @@
 //! A trained run as training leaves it and sampling reads it: `config.toml` (the network and
 //! its training, [`RunConfig`]), `model.safetensors` (the EMA weights) and `tensors.json` (the
 //! manifest of the tensors trained on: normalization, condition layout, target, templates),
-//! loaded together as a [`TrainedModel`]. Training writes runs (`train`); prediction and
+//! loaded together as a [`TrainedModel`]; an ensemble folder names several such runs whose
+//! outputs are averaged. Training writes runs (`train`); prediction and
 //! evaluation only read them, so neither depends on training.
 
 mod config;
+mod ensemble;
 mod weights;
 
 use std::path::{Path, PathBuf};
 
 pub use config::{Objective, RunConfig, TimeSampling, TrainConfig};
+pub use ensemble::ENSEMBLE_FILE;
 pub(crate) use weights::check_weights_file;
 pub use weights::{TENSORS_MANIFEST, TrainedModel, load_run, save_weights};
 
@@ -20,7 +23,8 @@ pub fn builtin_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("weights")
 }
 
-/// The run folder a model name stands for: `builtin` (the shipped weights) or a folder.
+/// The folder a model name stands for: `builtin` (the shipped weights), a run folder or an
+/// ensemble folder.
 pub fn model_dir(name: &str) -> Result<PathBuf> {
     if name == "builtin" {
         let dir = builtin_dir();
@@ -38,7 +42,7 @@ pub fn model_dir(name: &str) -> Result<PathBuf> {
     if !dir.is_dir() {
         return Err(Error::Config {
             path: name.to_string(),
-            message: "not a run folder (or `builtin`)".into(),
+            message: "not a run or ensemble folder (or `builtin`)".into(),
         });
     }
     Ok(dir)

@@ -78,6 +78,11 @@ pub struct TrainedModel {
     pub config: RunConfig,
     /// The network with the EMA weights.
     pub model: Dit,
+    /// Further networks whose outputs are averaged with `model`'s: the other members of an
+    /// ensemble folder ([`super::ensemble`]); empty for a run folder.
+    pub members: Vec<Dit>,
+    /// The run folder of each network, `model`'s first, then the `members`'.
+    pub networks: Vec<std::path::PathBuf>,
     /// `tensors.json`.
     pub data: TensorManifest,
     /// The device the network was loaded on, which sampling runs on.
@@ -91,8 +96,11 @@ impl TrainedModel {
     }
 
     /// Loads a run folder (see [`load_run`]) and its `tensors.json`, checked against the
-    /// configuration.
+    /// configuration, or an ensemble folder (`ensemble.toml`, [`super::ensemble`]).
     pub fn load(run: &Path, device: &Device) -> Result<Self> {
+        if run.join(super::ensemble::ENSEMBLE_FILE).is_file() {
+            return super::ensemble::load_ensemble(run, device);
+        }
         let (config, model) = load_run(run, device)?;
         let path = run.join(TENSORS_MANIFEST);
         let text = files::read_to_string(&path, files::limits::TEXT, "tensors manifest")?;
@@ -135,6 +143,8 @@ impl TrainedModel {
             run: run.to_path_buf(),
             config,
             model,
+            members: Vec::new(),
+            networks: vec![run.to_path_buf()],
             data,
             device: device.clone(),
         })

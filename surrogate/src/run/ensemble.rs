@@ -1,0 +1,95 @@
+//! An ensemble folder: `ensemble.toml` naming two or more run folders trained on the same
+//! tensors, loaded as one [`TrainedModel`] whose sampler averages the networks' outputs
+//! before guidance. Two models of one recipe trained with different seeds err differently,
+//! and their mean is closer to the truth than either (docs/SURROGATE.md, "An ensemble in the
+//! product"), at one network call per member.
+//!
+//! ```toml
+//! # ENSEMBLE/ensemble.toml: members relative to this folder (or absolute)
+//! members = ["../runs/seed0", "../runs/seed1"]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use burn::prelude::*;
+use serde::Deserialize;
+
+use super::weights::TrainedModel;
+use crate::error::{Result, file_error};
+
+/// The file that makes a folder an ensemble.
+pub const ENSEMBLE_FILE: &str = "ensemble.toml";
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnsembleFile {
+    members: Vec<PathBuf>,
+}
+
+/// Loads `dir/ensemble.toml` and its members. The members must be run folders with the same
+/// network (`[model]`) and byte-identical `tensors.json`, since their outputs are averaged in
+/// the normalized space those statistics define; anything else is an error naming the file.
+pub fn load_ensemble(dir: &Path, device: &Device) -> Result<TrainedModel> {
+    let path = dir.join(ENSEMBLE_FILE);
+    let text = files::read_to_string(&path, files::limits::TEXT, "ensemble file")?;
+    let file: EnsembleFile = toml::from_str(&text).map_err(|e| file_error(&path, e))?;
+    if file.members.len() < 2 {
+        return Err(file_error(
+            &path,
+            format!(
+                "members: {} run folder(s); an ensemble averages at least 2",
+                file.members.len()
+            ),
+        ));
+    }
+    let mut first: Option<(TrainedModel, String)> = None;
+    let mut members = Vec::new();
+    let mut networks = Vec::new();
+    for member in &file.members {
+        let run = dir.join(member);
+        if !run.is_dir() || run.join(ENSEMBLE_FILE).exists() {
+            return Err(file_error(
+                &path,
+                format!("member {}: not a run folder", run.display()),
+            ));
+        }
+        let trained = TrainedModel::load(&run, device)?;
+        let manifest = run.join(super::TENSORS_MANIFEST);
+        let tensors = files::read_to_string(&manifest, files::limits::TEXT, "tensors manifest")?;
+        networks.push(run.clone());
+        match &first {
+            None => first = Some((trained, tensors)),
+            Some((head, head_tensors)) => {
+                if trained.config.model != head.config.model {
+                    let difference = trained
+                        .config
+                        .first_difference(&head.config)
+                        .unwrap_or_default();
+                    return Err(file_error(
+                        &run.join("config.toml"),
+                        format!(
+                            "another network than the first member's ({difference}): an \
+                             ensemble averages networks of one configuration"
+                        ),
+                    ));
+                }
+                if tensors != *head_tensors {
+                    return Err(file_error(
+                        &manifest,
+                        format!(
+                            "differs from {}'s: an ensemble's members must be trained on the \
+                             same tensors",
+                            head.run.display()
+                        ),
+                    ));
+                }
+                members.push(trained.model);
+            }
+        }
+    }
+    let (mut head, _) = first.expect("at least two members were loaded");
+    head.run = dir.to_path_buf();
+    head.members = members;
+    head.networks = networks;
+    Ok(head)
+}
