@@ -58,7 +58,8 @@ impl SamplerArgs {
 
 #[derive(Debug, Args)]
 pub struct EvaluateArgs {
-    /// Trained model: a run folder, `builtin` (the shipped weights) or `none` (baselines only).
+    /// Trained model: a run folder, an ensemble folder (`ensemble.toml`), `builtin` (the shipped
+    /// weights), `builtin-pair` (the shipped ensemble of two) or `none` (baselines only).
     #[arg(long, default_value = "builtin")]
     pub model: String,
     /// Dataset folder (`synth --out`).
@@ -103,7 +104,8 @@ pub struct EvaluateArgs {
 
 #[derive(Debug, Args)]
 pub struct PredictArgs {
-    /// Trained model: a run folder (`train --out`) or `builtin` (the shipped weights).
+    /// Trained model: a run folder (`train --out`), an ensemble folder (`ensemble.toml`),
+    /// `builtin` (the shipped weights) or `builtin-pair` (the shipped ensemble of two).
     #[arg(long, default_value = "builtin")]
     pub model: String,
     #[command(flatten)]

@@ -93,3 +93,23 @@ pub fn load_ensemble(dir: &Path, device: &Device) -> Result<TrainedModel> {
     head.networks = networks;
     Ok(head)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_pair_is_the_built_in_model_and_one_more_network() {
+        let device = Device::flex();
+        let pair = TrainedModel::load_named("builtin-pair", &device).unwrap();
+        let single = TrainedModel::load_named("builtin", &device).unwrap();
+        assert_eq!(pair.members.len(), 1);
+        assert_eq!(pair.networks.len(), 2);
+        assert_eq!(
+            pair.networks[0].canonicalize().unwrap(),
+            super::super::builtin_dir().canonicalize().unwrap()
+        );
+        assert_eq!(pair.config.model, single.config.model);
+        assert_eq!(pair.run, super::super::builtin_pair_dir());
+    }
+}

@@ -23,9 +23,18 @@ pub fn builtin_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("weights")
 }
 
-/// The folder a model name stands for: `builtin` (the shipped weights), a run folder or an
-/// ensemble folder.
+/// The shipped ensemble, which `--model builtin-pair` names: the built-in model and the same
+/// recipe trained with another seed, averaged (more accurate, at two network calls a frame).
+pub fn builtin_pair_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("ensemble")
+}
+
+/// The folder a model name stands for: `builtin` (the shipped weights), `builtin-pair` (the
+/// shipped ensemble), a run folder or an ensemble folder.
 pub fn model_dir(name: &str) -> Result<PathBuf> {
+    if name == "builtin-pair" {
+        return Ok(builtin_pair_dir());
+    }
     if name == "builtin" {
         let dir = builtin_dir();
         if !dir.join("model.safetensors").is_file() {
@@ -42,7 +51,7 @@ pub fn model_dir(name: &str) -> Result<PathBuf> {
     if !dir.is_dir() {
         return Err(Error::Config {
             path: name.to_string(),
-            message: "not a run or ensemble folder (or `builtin`)".into(),
+            message: "not a run or ensemble folder (or `builtin`, `builtin-pair`)".into(),
         });
     }
     Ok(dir)
