@@ -172,8 +172,7 @@ pub struct DemoArgs {
     pub obj_every: usize,
     /// The surrogate that predicts the same sequence: `builtin` (the shipped model),
     /// `builtin-pair` (the shipped ensemble of two), a run or ensemble folder, or `none`
-    /// (simulate only). (`--model` is the body model, as in
-    /// `simulate`.)
+    /// (simulate only). (`--model` is the body model, as in `simulate`.)
     #[arg(long, default_value = "builtin")]
     pub surrogate: String,
     /// Also write the numbers (frames, fps, timing, the prediction's scores) to this JSON file.

@@ -73,9 +73,9 @@ pub fn select(
 }
 
 /// What `evaluate` records of a model (`model` in its JSON: the run folder, the weights'
-/// SHA-256 (an ensemble's members' too), target, resolution, configuration and the templates trained on), and the part of
-/// that which makes its predictions (the weights and their configuration, not the folder they
-/// are in) for the results' [`fingerprint`].
+/// SHA-256 (an ensemble's members' too), target, resolution, configuration and the templates
+/// trained on), and the part of that which makes its predictions (the weights and their
+/// configuration, not the folder they are in) for the results' [`fingerprint`].
 pub fn describe_model(t: &TrainedModel) -> Result<(Value, Value)> {
     let mut shas = Vec::new();
     for run in &t.networks {

@@ -2,8 +2,8 @@
 //! its training, [`RunConfig`]), `model.safetensors` (the EMA weights) and `tensors.json` (the
 //! manifest of the tensors trained on: normalization, condition layout, target, templates),
 //! loaded together as a [`TrainedModel`]; an ensemble folder names several such runs whose
-//! outputs are averaged. Training writes runs (`train`); prediction and
-//! evaluation only read them, so neither depends on training.
+//! outputs are averaged. Training writes runs (`train`); prediction and evaluation only read
+//! them, so neither depends on training.
 
 mod config;
 mod ensemble;
