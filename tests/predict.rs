@@ -267,7 +267,7 @@ fn bad_inputs_are_named_and_leave_nothing() {
     let run = s(&f.run);
     let truth = s(&f.truth);
     let e = base(&["--model", s(&dir.path().join("nowhere"))]);
-    assert!(e.contains("not a run folder"), "{e}");
+    assert!(e.contains("not a run or ensemble folder"), "{e}");
     let e = base(&["--model", run, "--config-from", truth, "--steps", "0"]);
     assert!(e.contains("steps = 0"), "{e}");
     let e = base(&["--model", run, "--config-from", truth, "--guidance", "-1"]);
