@@ -12,7 +12,7 @@
 #   tools/ablation.sh tensors-window8 DESIGNS OUT   # designs.toml's tensors with an 8-frame pose window (a8_*)
 #   tools/ablation.sh tensors-motions MOTIONS OUT   # bounded tensors of specs/motions.toml's data (a9_*)
 #   tools/ablation.sh tensors-SPEC DATA OUT         # the same of specs/SPEC.toml's data, SPEC one of
-#     random14 (a10_*), random_wide (a11_*, a15_*), random21 (a12_*), random28 (a13_*), union (a14_*)
+#     random14 (a10_*), random_wide (a11_*, a15_*, a16_*), random21 (a12_*), random28 (a13_*), union (a14_*)
 #   tools/ablation.sh train ARM OUT             # trains OUT/runs/ARM (resumes a killed run)
 #   tools/ablation.sh evaluate ARM DATA HELDOUT OUT [THREADS]   # OUT/eval/ARM-{shipped,heldout}.json
 #     (DATA: the arm's own dataset, whose `train` split it trained on; its test splits are
@@ -38,7 +38,7 @@ tensors_of() {
     a8_*) echo window8 ;;
     a9_*) echo motions ;;
     a10_*) echo random14 ;;
-    a11_* | a15_*) echo random_wide ;;
+    a11_* | a15_* | a16_*) echo random_wide ;;
     a12_*) echo random21 ;;
     a13_*) echo random28 ;;
     a14_*) echo union ;;
