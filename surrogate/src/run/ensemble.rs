@@ -42,56 +42,63 @@ pub fn load_ensemble(dir: &Path, device: &Device) -> Result<TrainedModel> {
             ),
         ));
     }
-    let mut first: Option<(TrainedModel, String)> = None;
+    let (mut head, head_tensors) = load_member(dir, &path, &file.members[0], device)?;
     let mut members = Vec::new();
-    let mut networks = Vec::new();
-    for member in &file.members {
-        let run = dir.join(member);
-        if !run.is_dir() || run.join(ENSEMBLE_FILE).exists() {
+    let mut networks = vec![head.run.clone()];
+    for member in &file.members[1..] {
+        let (trained, tensors) = load_member(dir, &path, member, device)?;
+        let run = &trained.run;
+        if trained.config.model != head.config.model {
+            let difference = trained
+                .config
+                .first_difference(&head.config)
+                .unwrap_or_default();
             return Err(file_error(
-                &path,
-                format!("member {}: not a run folder", run.display()),
+                &run.join("config.toml"),
+                format!(
+                    "another network than the first member's ({difference}): an ensemble \
+                     averages networks of one configuration"
+                ),
             ));
         }
-        let trained = TrainedModel::load(&run, device)?;
-        let manifest = run.join(super::TENSORS_MANIFEST);
-        let tensors = files::read_to_string(&manifest, files::limits::TEXT, "tensors manifest")?;
-        networks.push(run.clone());
-        match &first {
-            None => first = Some((trained, tensors)),
-            Some((head, head_tensors)) => {
-                if trained.config.model != head.config.model {
-                    let difference = trained
-                        .config
-                        .first_difference(&head.config)
-                        .unwrap_or_default();
-                    return Err(file_error(
-                        &run.join("config.toml"),
-                        format!(
-                            "another network than the first member's ({difference}): an \
-                             ensemble averages networks of one configuration"
-                        ),
-                    ));
-                }
-                if tensors != *head_tensors {
-                    return Err(file_error(
-                        &manifest,
-                        format!(
-                            "differs from {}'s: an ensemble's members must be trained on the \
-                             same tensors",
-                            head.run.display()
-                        ),
-                    ));
-                }
-                members.push(trained.model);
-            }
+        if tensors != head_tensors {
+            return Err(file_error(
+                &run.join(super::TENSORS_MANIFEST),
+                format!(
+                    "differs from {}'s: an ensemble's members must be trained on the same \
+                     tensors",
+                    head.run.display()
+                ),
+            ));
         }
+        networks.push(run.clone());
+        members.push(trained.model);
     }
-    let (mut head, _) = first.expect("at least two members were loaded");
     head.run = dir.to_path_buf();
     head.members = members;
     head.networks = networks;
     Ok(head)
+}
+
+/// One member of the ensemble file `path`: a run folder (relative to `dir`) and the text of
+/// its `tensors.json`, which the members must share byte for byte.
+fn load_member(
+    dir: &Path,
+    path: &Path,
+    member: &Path,
+    device: &Device,
+) -> Result<(TrainedModel, String)> {
+    let run = dir.join(member);
+    if !run.is_dir() || run.join(ENSEMBLE_FILE).exists() {
+        return Err(file_error(
+            path,
+            format!("member {}: not a run folder", run.display()),
+        ));
+    }
+    let trained = TrainedModel::load(&run, device)?;
+    let manifest = run.join(super::TENSORS_MANIFEST);
+    let tensors = files::read_to_string(&manifest, files::limits::TEXT, "tensors manifest")?;
+    Ok((trained, tensors))
 }
 
 #[cfg(test)]
