@@ -308,15 +308,19 @@ fn silu_value(x: f32) -> f32 {
 pub fn exp_vectorizable(x: f32) -> f32 {
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
-    // Adding then subtracting 1.5 * 2^23 rounds to the nearest integer without a branch.
+    // Adding 1.5 * 2^23 rounds to the nearest integer without a branch and leaves that
+    // integer in the low bits, so 2^n is built with integer adds and a shift (a float-to-int
+    // `as` cast saturates lane by lane and stops the loop from vectorizing).
     const ROUND: f32 = 12_582_912.0;
     let x = x.clamp(-87.3, 88.3);
-    let n = (x * std::f32::consts::LOG2_E + ROUND) - ROUND;
+    let shifted = x * std::f32::consts::LOG2_E + ROUND;
+    let n = shifted - ROUND;
     let r = x - n * LN2_HI - n * LN2_LO;
     let p = 1.0
         + r * (1.0
             + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r / 720.0)))));
-    f32::from_bits(((n as i32 + 127) << 23) as u32) * p
+    let two_to_n = (shifted.to_bits().wrapping_sub(ROUND.to_bits()).wrapping_add(127)) << 23;
+    f32::from_bits(two_to_n) * p
 }
 
 #[cfg(test)]
