@@ -357,8 +357,10 @@ impl<'a> Predictor<'a> {
         let garment: &PreparedGarment = garment;
         for round in all.chunks(settings.batch * lanes) {
             let started = Instant::now();
+            // A short last round is shared evenly, not left to the first lanes while the
+            // others wait.
             let results = round
-                .chunks(settings.batch)
+                .chunks(round.len().div_ceil(lanes))
                 .zip(pools.iter_mut())
                 .collect::<Vec<_>>()
                 .into_par_iter()
