@@ -170,8 +170,8 @@ pub struct DemoArgs {
     /// Write an OBJ of every K-th frame (0 = none).
     #[arg(long, default_value_t = 15)]
     pub obj_every: usize,
-    /// The surrogate that predicts the same sequence: `builtin` (the shipped model),
-    /// `builtin-pair` (the shipped ensemble of two), a run or ensemble folder, or `none`
+    /// The surrogate that predicts the same sequence: `builtin` (the shipped ensemble of two
+    /// networks), `builtin-single` (its first network alone), a run or ensemble folder, or `none`
     /// (simulate only). (`--model` is the body model, as in `simulate`.)
     #[arg(long, default_value = "builtin")]
     pub surrogate: String,

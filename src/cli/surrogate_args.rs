@@ -59,7 +59,8 @@ impl SamplerArgs {
 #[derive(Debug, Args)]
 pub struct EvaluateArgs {
     /// Trained model: a run folder, an ensemble folder (`ensemble.toml`), `builtin` (the shipped
-    /// weights), `builtin-pair` (the shipped ensemble of two) or `none` (baselines only).
+    /// ensemble of two networks), `builtin-single` (its first network alone, faster) or `none`
+    /// (baselines only).
     #[arg(long, default_value = "builtin")]
     pub model: String,
     /// Dataset folder (`synth --out`).
@@ -105,7 +106,8 @@ pub struct EvaluateArgs {
 #[derive(Debug, Args)]
 pub struct PredictArgs {
     /// Trained model: a run folder (`train --out`), an ensemble folder (`ensemble.toml`),
-    /// `builtin` (the shipped weights) or `builtin-pair` (the shipped ensemble of two).
+    /// `builtin` (the shipped ensemble of two networks) or `builtin-single` (its first network
+    /// alone, faster).
     #[arg(long, default_value = "builtin")]
     pub model: String,
     #[command(flatten)]

@@ -106,17 +106,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_shipped_pair_is_the_built_in_model_and_one_more_network() {
+    fn the_shipped_model_is_the_single_network_and_one_more() {
         let device = Device::flex();
-        let pair = TrainedModel::load_named("builtin-pair", &device).unwrap();
-        let single = TrainedModel::load_named("builtin", &device).unwrap();
+        let pair = TrainedModel::load_named("builtin", &device).unwrap();
+        let single = TrainedModel::load_named("builtin-single", &device).unwrap();
         assert_eq!(pair.members.len(), 1);
         assert_eq!(pair.networks.len(), 2);
         assert_eq!(
             pair.networks[0].canonicalize().unwrap(),
-            super::super::builtin_dir().canonicalize().unwrap()
+            super::super::builtin_single_dir().canonicalize().unwrap()
         );
         assert_eq!(pair.config.model, single.config.model);
-        assert_eq!(pair.run, super::super::builtin_pair_dir());
+        assert_eq!(pair.run, super::super::builtin_dir());
+        assert!(single.members.is_empty());
     }
 }
