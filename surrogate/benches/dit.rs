@@ -16,12 +16,15 @@ use surrogate::model::{Depthwise, Dit, DitConfig};
 use surrogate::run::TrainConfig;
 use surrogate::train::clip_global_norm;
 
-fn inputs(b: usize, r: usize, d: usize) -> (Tensor<4>, Tensor<4>, Tensor<4>, Tensor<1>, Tensor<2>) {
+/// A batch of `b` random inputs for `config`: noisy target, texel inputs (the position map and,
+/// with body inputs, the skinned base and its change), mask, time, conditions.
+fn inputs(b: usize, config: &DitConfig) -> (Tensor<4>, Tensor<4>, Tensor<4>, Tensor<1>, Tensor<2>) {
     let device = Device::flex();
     let n = Distribution::Normal(0.0, 1.0);
+    let (r, d) = (config.resolution, config.condition_dim);
     (
         Tensor::random([b, 3, r, r], n, &device),
-        Tensor::random([b, 3, r, r], n, &device),
+        Tensor::random([b, config.texel_channels(), r, r], n, &device),
         Tensor::ones([b, 1, r, r], &device),
         Tensor::random([b], Distribution::Default, &device),
         Tensor::random([b, d], n, &device),
@@ -46,7 +49,7 @@ fn forward_ms(config: &DitConfig, batch: usize) -> f64 {
     let device = Device::flex();
     device.seed(0);
     let model = Dit::new(config, &device);
-    let (x, p, m, s, c) = inputs(batch, config.resolution, config.condition_dim);
+    let (x, p, m, s, c) = inputs(batch, config);
     let reps = if batch >= 16 { 2 } else { 5 };
     1e3 * time(reps, || {
         let out = model.forward(x.clone(), p.clone(), m.clone(), s.clone(), c.clone());
@@ -63,7 +66,7 @@ fn train_samples_per_s(config: &DitConfig, batch: usize) -> f64 {
         .with_epsilon(1e-8)
         .with_weight_decay(1e-2)
         .init();
-    let (x, p, m, s, c) = inputs(batch, config.resolution, config.condition_dim);
+    let (x, p, m, s, c) = inputs(batch, config);
     let target = x.clone();
     let seconds = time(2, || {
         let current = model.take().expect("a model");
