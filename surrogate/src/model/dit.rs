@@ -311,11 +311,7 @@ mod tests {
             .try_into_vec_as()
             .unwrap();
         let b: Vec<f32> = conv.forward(x, pos, mask, s, c).try_into_vec_as().unwrap();
-        let worst = a
-            .iter()
-            .zip(&b)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f32::max);
+        let worst = crate::model::layers::tests::largest_difference(&a, &b);
         assert!(worst < 1e-4, "largest difference {worst}");
     }
 

@@ -362,12 +362,17 @@ pub(crate) mod tests {
         let x = Tensor::<4>::random([2, 5, 6, 6], Distribution::Normal(0.0, 1.0), &device);
         let a = values(conv.forward(x.clone(), Depthwise::Shifted));
         let b = values(conv.forward(x, Depthwise::Conv2d));
-        let worst = a
-            .iter()
-            .zip(&b)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f32::max);
+        let worst = largest_difference(&a, &b);
         assert!(worst < 1e-5, "largest difference {worst}");
+    }
+
+    /// The largest absolute difference between two equally long lists of values.
+    pub(crate) fn largest_difference(a: &[f32], b: &[f32]) -> f32 {
+        assert_eq!(a.len(), b.len());
+        a.iter()
+            .zip(b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max)
     }
 
     /// The autodiff gradient of `f` at `x` checked by central differences: along the gradient
@@ -451,11 +456,7 @@ pub(crate) mod tests {
         let autodiff = device.clone().autodiff();
         let xa = Tensor::<3>::from_data(x.to_data(), &autodiff);
         let training: Vec<f32> = ffn.train().forward(xa).try_into_vec_as().unwrap();
-        let worst = sampling
-            .iter()
-            .zip(&training)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f32::max);
+        let worst = largest_difference(&sampling, &training);
         assert!(worst < 1e-5, "largest difference {worst}");
     }
 
