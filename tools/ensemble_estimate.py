@@ -6,7 +6,7 @@ reproduce `evaluate`'s E_v, which checks the scoring. docs/SURROGATE.md, "An ens
 
 usage: python3 tools/ensemble_estimate.py BIN DATA OUT NAME=MODEL [NAME=MODEL ...]
   BIN   the dit-garment binary; DATA a dataset folder (`synth --out`); OUT a folder for the
-  predictions and ensemble.json; MODEL a run folder or `builtin`.
+  predictions and ensemble.json; MODEL a run or ensemble folder, `builtin` or `builtin-single`.
 """
 import itertools
 import json
