@@ -199,7 +199,8 @@ pub struct MixFfn {
     pub depthwise: DepthwiseConv,
     /// `H -> C`.
     pub point: Linear,
-    /// How the depthwise convolution is computed.
+    /// How the depthwise convolution is computed under autodiff (sampling has its own kernel
+    /// for the same function, `MixFfn::sampling_middle`).
     #[module(skip)]
     pub how: Depthwise,
 }
@@ -323,7 +324,7 @@ fn silu_value(x: f32) -> f32 {
 /// SiLU only needs e^-x to saturate there. No crate offers a vectorizing f32 exp on stable
 /// Rust without a SIMD framework, which is why it is written here.
 #[inline(always)]
-pub fn exp_vectorizable(x: f32) -> f32 {
+fn exp_vectorizable(x: f32) -> f32 {
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
     // Adding 1.5 * 2^23 rounds to the nearest integer without a branch and leaves that
