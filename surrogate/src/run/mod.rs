@@ -34,7 +34,13 @@ pub fn builtin_single_dir() -> PathBuf {
 /// The folder a model name stands for: `builtin` (the shipped ensemble), `builtin-single` (its
 /// first network alone), a run folder or an ensemble folder.
 pub fn model_dir(name: &str) -> Result<PathBuf> {
-    if name == "builtin" || name == "builtin-single" {
+    let builtin = match name {
+        "builtin" => Some(builtin_dir()),
+        "builtin-single" => Some(builtin_single_dir()),
+        _ => None,
+    };
+    if let Some(dir) = builtin {
+        // Both name the shipped weights (the ensemble's first member is the single network).
         let single = builtin_single_dir();
         if !single.join("model.safetensors").is_file() {
             return Err(Error::Config {
@@ -44,11 +50,7 @@ pub fn model_dir(name: &str) -> Result<PathBuf> {
                     .into(),
             });
         }
-        return Ok(if name == "builtin" {
-            builtin_dir()
-        } else {
-            single
-        });
+        return Ok(dir);
     }
     let dir = PathBuf::from(name);
     if !dir.is_dir() {

@@ -90,7 +90,8 @@ pub struct TrainedModel {
 }
 
 impl TrainedModel {
-    /// The model a name stands for ([`super::model_dir`]: `builtin`, `builtin-single`, a run or ensemble folder).
+    /// The model a name stands for ([`super::model_dir`]: `builtin`, `builtin-single`, a run
+    /// or ensemble folder).
     pub fn load_named(name: &str, device: &Device) -> Result<Self> {
         Self::load(&super::model_dir(name)?, device)
     }
