@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-30}"
 bin="${DIT_GARMENT_BIN:?set DIT_GARMENT_BIN to the dit-garment binary}"
-targets=(recording obj pattern npz spec scene_config)
+targets=(recording obj pattern npz spec scene_config bvh)
 shared=../../shared/testdata
 mkdir -p "${targets[@]/#/corpus/}"
 seeds=$(mktemp -d)
@@ -28,6 +28,15 @@ if [ -d "$shared" ]; then
   cp "$shared"/garmentcode/*.json corpus/pattern/ 2>/dev/null || true
   cp "$shared"/bodies/*.obj corpus/obj/ 2>/dev/null || true
 fi
+# BVH: CMU's first clip cut to its hierarchy and a few frames (Debian's assimp-testmodels), and a
+# two-joint file written here.
+cmu=/usr/share/assimp/models/BVH/01_01.bvh
+if [ -f "$cmu" ]; then
+  awk '/^Frames:/{print "Frames: 3"; next} {print} /^Frame Time:/{n=NR} n&&NR>n+2{exit}' "$cmu" \
+    >corpus/bvh/seed_cmu.bvh
+fi
+printf 'HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n JOINT Leg\n {\n  OFFSET 0 -1 0\n  CHANNELS 3 Xrotation Yrotation Zrotation\n  End Site\n  {\n   OFFSET 0 -1 0\n  }\n }\n}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n0 1 0 0 0 0 0 0 0\n0 1 0 0 0 0 10 0 0\n' \
+  >corpus/bvh/seed_two_joints.bvh
 python3 - corpus/npz <<'PY' || echo "note: python3 with numpy not found: no npz seeds"
 import sys, numpy as np
 out = sys.argv[1]

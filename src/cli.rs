@@ -59,7 +59,8 @@ pub enum Command {
     /// Pose a body (default body or an SMPL .npz model) and write it as OBJ in the model's
     /// vertex order.
     Body(BodyArgs),
-    /// List, inspect and export motions (built-in procedural motions or AMASS .npz files).
+    /// List, inspect and export motions (built-in procedural motions, AMASS .npz files, BVH
+    /// motion capture).
     Motions {
         #[command(subcommand)]
         command: MotionsCommand,
@@ -234,8 +235,9 @@ pub struct SceneInputs {
     /// default body in its canonical A-pose. Default: `default`.
     #[arg(long)]
     pub garment: Option<String>,
-    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`) or an
-    /// AMASS .npz file. Default: `walk`.
+    /// Motion: a built-in name (with optional `:speed=..,amplitude=..,duration=..`), an
+    /// AMASS .npz file or a BVH file (retargeted to SMPL), a file optionally followed by
+    /// `:start=S,duration=D` (seconds) and, for BVH, `map=JOINTS.toml`. Default: `walk`.
     #[arg(long)]
     pub motion: Option<String>,
     /// SMPL-format .npz body model file (SMPL_NEUTRAL.npz ...); the licence-free default body
@@ -572,7 +574,7 @@ pub struct BodyArgs {
     /// radians: global_orient then body_pose) and `transl` (3 values, metres); all optional.
     #[arg(long)]
     pub params: Option<PathBuf>,
-    /// Take the pose and translation from this motion (built-in name or AMASS .npz) ...
+    /// Take the pose and translation from this motion (built-in name, AMASS .npz or BVH) ...
     #[arg(long, requires = "frame")]
     pub motion: Option<String>,
     /// ... at this frame (30 fps frames, from 0).
@@ -593,7 +595,8 @@ pub enum MotionsCommand {
     },
     /// Describe one motion: frames, rate, duration, root travel, range of each joint.
     Show {
-        /// Built-in name (optionally `name:speed=..,amplitude=..,duration=..`) or AMASS .npz.
+        /// Built-in name (optionally `name:speed=..,amplitude=..,duration=..`), AMASS .npz or
+        /// BVH file (optionally `FILE:start=S,duration=D`, and `map=JOINTS.toml` for BVH).
         motion: String,
         #[command(flatten)]
         model: ModelArgs,
@@ -601,11 +604,13 @@ pub enum MotionsCommand {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Export a motion as an MCAP sequence with body poses, joints and vertices per frame.
+    /// Export a motion as an MCAP sequence with body poses, joints and vertices per frame, or
+    /// (`--out FILE.npz`) as an AMASS-style .npz of its poses at 30 fps.
     Export {
-        /// Built-in name (optionally with parameters) or AMASS .npz file.
+        /// Built-in name (optionally with parameters), AMASS .npz or BVH file.
         motion: String,
-        /// Output .mcap file.
+        /// Output: .mcap (body sequence) or .npz (AMASS-style: `poses` N x 156, `trans`,
+        /// `betas`, `gender`, `mocap_framerate`; z up as AMASS; no blend-in).
         #[arg(long)]
         out: PathBuf,
         #[command(flatten)]

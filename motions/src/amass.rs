@@ -8,6 +8,7 @@
 //! - AMASS is z-up: the root turns by Rx(-90 deg) and translations become
 //!   `R (trans + J0) - J0`, with J0 the shaped pelvis rest joint of the body that will wear the
 //!   motion, so the pelvis moves exactly as in the source.
+//! - [`write`] is the inverse, for `motions export --out FILE.npz`.
 
 use std::path::Path;
 
@@ -151,4 +152,57 @@ pub fn from_npz<R: std::io::Read + std::io::Seek>(
     motion.betas = betas;
     motion.gender = gender;
     Ok(motion)
+}
+
+/// Writes a 30 fps SMPL motion as an AMASS-style (SMPL+H layout, z up) `.npz`, atomically:
+/// `poses` (N x 156: root, 21 body joints, zero hands; SMPL's two hand joints have no place
+/// in that layout and are left out), `trans` (N x 3), `betas` (16), `gender` (`neutral`) and
+/// `mocap_framerate`. [`load`] with the same `pelvis_rest` reads it back to the same frames.
+pub fn write(path: &Path, motion: &Motion, pelvis_rest: [f64; 3], betas: &[f64]) -> Result<()> {
+    use npyz::WriterBuilder;
+    let y_up_to_z_up =
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
+    let j0 = Vector3::from(pelvis_rest);
+    let count = motion.len() as u64;
+    let mut poses = Vec::with_capacity(motion.len() * 156);
+    let mut trans = Vec::with_capacity(motion.len() * 3);
+    for frame in &motion.frames {
+        let p = &frame.pose;
+        let root = y_up_to_z_up * axis_angle_to_quat([p[0], p[1], p[2]]);
+        poses.extend(quat_to_axis_angle(&root));
+        poses.extend(&p[3..66]);
+        poses.extend([0.0; 90]);
+        let t = y_up_to_z_up * (Vector3::from(frame.transl) + j0) - j0;
+        trans.extend([t.x, t.y, t.z]);
+    }
+    let mut shape = [0.0; 16];
+    for (s, b) in shape.iter_mut().zip(betas) {
+        *s = *b;
+    }
+    let arrays: [(&str, &[u64], &[f64]); 4] = [
+        ("poses", &[count, 156], &poses),
+        ("trans", &[count, 3], &trans),
+        ("betas", &[16], &shape),
+        ("mocap_framerate", &[], &[motion.fps]),
+    ];
+    files::write_with(path, |w| {
+        let mut npz = npyz::npz::NpzWriter::new(w);
+        for (name, shape, data) in arrays {
+            npz.array::<f64>(name, Default::default())?
+                .default_dtype()
+                .shape(shape)
+                .begin_nd()?
+                .extend(data.iter().copied())?;
+        }
+        npz.array::<str>("gender", Default::default())?
+            .dtype(npyz::DType::Plain(
+                "<U7".parse().map_err(std::io::Error::other)?,
+            ))
+            .shape(&[])
+            .begin_nd()?
+            .push("neutral")?;
+        npz.zip_writer().finish().map_err(std::io::Error::other)?;
+        Ok(())
+    })?;
+    Ok(())
 }

@@ -54,6 +54,24 @@ pub enum Error {
         /// What is wrong with it.
         problem: String,
     },
+    /// A BVH file is damaged or cannot be retargeted; `line` is where (1 for the whole file).
+    #[error("{path}: line {line}: {problem}")]
+    Bvh {
+        /// The file.
+        path: PathBuf,
+        /// The line at fault, 1-based.
+        line: usize,
+        /// What is wrong there.
+        problem: String,
+    },
+    /// A BVH joint map file is malformed or does not fit the BVH file.
+    #[error("{path}: {problem}")]
+    JointMap {
+        /// The map file.
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
     /// Inputs to a computation are inconsistent (wrong lengths, non-finite values).
     #[error("{0}")]
     Invalid(String),

@@ -4,8 +4,10 @@
 //!   compiled-in licence-free default body ([`BodyModel::default_body`]), with the forward pass
 //!   (betas, 72-d axis-angle pose and translation to vertices, joints and joint transforms).
 //! - [`Motion`]: a sequence of SMPL poses at a frame rate, from the built-in procedural library
-//!   ([`library`]) or AMASS files ([`amass`]), with time-correct resampling, blend-in from the
-//!   canonical A-pose, and the pose windows the surrogate learns from.
+//!   ([`library`]), AMASS files ([`amass`]) or BVH motion capture retargeted to SMPL
+//!   ([`bvh`]), named by one argument everywhere ([`MotionSource`]), with time-correct
+//!   resampling, blend-in from the canonical A-pose, and the pose windows the surrogate
+//!   learns from.
 //!
 //! Conventions are SMPL's: metres, y up, the body facing +z, +x the body's left, zero pose the
 //! T-pose.
@@ -13,6 +15,7 @@
 
 pub mod amass;
 mod body_model;
+pub mod bvh;
 mod error;
 mod forward;
 pub mod library;
@@ -20,6 +23,7 @@ mod motion;
 pub mod npz;
 pub mod rotation;
 mod skeleton;
+pub mod source;
 
 pub use body_model::{BodyModel, ModelArrays, boundary_edges};
 pub use error::{Error, Result};
@@ -30,3 +34,4 @@ pub use motion::{
 pub use skeleton::{
     JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index,
 };
+pub use source::{FileFormat, FileMotion, LoadedMotion, MotionSource, place_on_floor};

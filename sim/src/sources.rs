@@ -1,12 +1,11 @@
 //! What a scene configuration names, loaded: the body model, a motion (a built-in name with
-//! optional parameters, or an AMASS file) and a garment template (a library design or variant,
+//! optional parameters, an AMASS file or a BVH file) and a garment template (a library design or variant,
 //! the built-in skirt, or an OBJ file). The command line, dataset synthesis and the surrogate's
 //! tools load through here, so a name means the same thing in every command.
 
 use std::path::Path;
 
-use motions::library::MotionSpec;
-use motions::{BodyModel, FramePose, Motion, POSE_DIM, ShapedBody};
+use motions::{BodyModel, FramePose, Motion, MotionSource, POSE_DIM, ShapedBody};
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
@@ -83,18 +82,11 @@ pub fn body_model(path: Option<&Path>) -> Result<BodyModel> {
     }
 }
 
-/// A motion at 30 fps: a built-in name (with optional parameters) generated for `shaped`, or an
-/// AMASS `.npz` file resampled by time.
+/// A motion at 30 fps for `shaped`: a built-in name (with optional parameters), an AMASS
+/// `.npz` file or a BVH file retargeted to SMPL, each file optionally a stretch
+/// ([`motions::MotionSource`]).
 pub fn motion(source: &str, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
-    let path = Path::new(source);
-    if source.ends_with(".npz") || path.exists() {
-        let raw = motions::amass::load(path, shaped.joints[0])?;
-        return raw.resample(30.0).map_err(|e| Error::Config {
-            path: source.to_string(),
-            message: format!("resampling to 30 fps: {e}"),
-        });
-    }
-    Ok(MotionSpec::parse(source)?.generate(model, shaped)?)
+    Ok(MotionSource::parse(source)?.load(model, shaped)?.motion)
 }
 
 /// A garment template and its body attachments: a library design (sewn on `model` once and

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use motions::library::{MOTIONS, MotionSpec};
-use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES};
+use motions::{BlendIn, JOINT_NAMES, MAX_PREFIX_FRAMES, MotionSource};
 use serde_json::json;
 use sim::recording::write_body_sequence;
 
@@ -36,7 +36,30 @@ pub fn run(command: MotionsCommand) -> Result<()> {
                 );
             }
             let model = sim::sources::body_model(model.body_model.as_deref())?;
-            let motion = sim::sources::motion(&motion, &model, &model.shape(&betas)?)?;
+            let shaped = model.shape(&betas)?;
+            let motion = sim::sources::motion(&motion, &model, &shaped)?;
+            if out
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("npz"))
+            {
+                files::create_folder_of(&out)?;
+                motions::amass::write(&out, &motion, shaped.joints[0], &betas)?;
+                say!(
+                    "wrote {} (AMASS-style: {} frames at {} fps, {:.2} s, z up)",
+                    out.display(),
+                    motion.len(),
+                    motion.fps,
+                    motion.duration()
+                );
+                if let Some(path) = json {
+                    let bytes = std::fs::metadata(&out)?.len();
+                    write_json(
+                        &path,
+                        &json!({"frames": motion.len(), "fps": motion.fps, "bytes": bytes, "file": out}),
+                    )?;
+                }
+                return Ok(());
+            }
             let blend = BlendIn {
                 blend_frames,
                 settle_frames,
@@ -85,7 +108,7 @@ fn list(json_path: Option<&std::path::Path>) -> Result<()> {
             "parameters": {"speed": "tempo multiplier, 0.25-3, default 1", "amplitude": "joint-angle multiplier, 0-1.5, default 1", "duration": "seconds, default as listed", "seed": "random only: which random motion, a whole number, default 0"}}));
     }
     say!(
-        "\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6 (and random:seed=N); AMASS .npz files are accepted wherever a motion is"
+        "\nvariants: NAME:speed=1.3,amplitude=0.8,duration=6 (and random:seed=N); AMASS .npz and BVH files are accepted wherever a motion is, as FILE or FILE:start=S,duration=D (BVH: also map=JOINTS.toml)"
     );
     if let Some(path) = json_path {
         write_json(path, &rows)?;
@@ -99,7 +122,8 @@ fn show(
     json_path: Option<&std::path::Path>,
 ) -> Result<()> {
     let model = sim::sources::body_model(model_path)?;
-    let motion = sim::sources::motion(source, &model, &model.shape(&[])?)?;
+    let loaded = MotionSource::parse(source)?.load(&model, &model.shape(&[])?)?;
+    let motion = &loaded.motion;
     let (first, last) = (
         motion.frames[0].transl,
         motion.frames[motion.len() - 1].transl,
@@ -111,6 +135,41 @@ fn show(
     say!("frames    {frames} at {fps} fps ({duration:.2} s)");
     let [x, y, z] = travel;
     say!("root      travel x {x:+.3} y {y:+.3} z {z:+.3} m");
+    if let Some(r) = &loaded.retarget {
+        say!(
+            "source    {} frames at {:.2} fps{}; {} up, facing {}; {:.6} m per unit (from the {})",
+            r.source_frames,
+            r.source_fps,
+            if r.reference_frame_dropped {
+                " (the first, a reference pose, dropped)"
+            } else {
+                ""
+            },
+            r.up_axis,
+            r.forward_axis,
+            r.metres_per_unit,
+            r.scale_from
+        );
+        let pairs: Vec<String> = r.mapped.iter().map(|(s, b)| format!("{s}<-{b}")).collect();
+        say!(
+            "mapped    {} joints ({} map): {}",
+            pairs.len(),
+            r.map,
+            pairs.join(" ")
+        );
+        say!(
+            "dropped   {} BVH joints: {}",
+            r.dropped.len(),
+            r.dropped.join(" ")
+        );
+        if !r.unmapped.is_empty() {
+            say!(
+                "unmapped  {} SMPL joints (follow their parent): {}",
+                r.unmapped.len(),
+                r.unmapped.join(" ")
+            );
+        }
+    }
     say!("joint rotation ranges (degrees from the T-pose, max over frames):");
     for (name, deg) in JOINT_NAMES
         .iter()
@@ -120,11 +179,25 @@ fn show(
         say!("  {name:<15} {deg:>6.1}");
     }
     if let Some(path) = json_path {
-        let summary = json!({
+        let mut summary = json!({
             "name": motion.name, "frames": frames, "fps": fps, "duration_s": duration,
             "root_travel_m": travel, "max_joint_angle_deg": max_angle, "joint_names": JOINT_NAMES,
             "gender": motion.gender, "betas": motion.betas,
         });
+        if let Some(r) = &loaded.retarget {
+            summary["source"] = json!({"format": "bvh", "frames": r.source_frames, "fps": r.source_fps,
+                "reference_frame_dropped": r.reference_frame_dropped, "up_axis": r.up_axis,
+                "forward_axis": r.forward_axis, "metres_per_unit": r.metres_per_unit,
+                "scale_from": r.scale_from, "joint_map": r.map});
+            summary["mapped_joints"] = r
+                .mapped
+                .iter()
+                .map(|(s, b)| (s.to_string(), json!(b)))
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+            summary["dropped_joints"] = json!(r.dropped);
+            summary["unmapped_joints"] = json!(r.unmapped);
+        }
         write_json(path, &summary)?;
     }
     Ok(())

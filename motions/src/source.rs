@@ -1,0 +1,234 @@
+//! What a motion argument names, everywhere a motion is accepted: a built-in motion
+//! (`walk`, `random:seed=3,speed=1.2`, [`crate::library`]), an AMASS `.npz` file, or a BVH
+//! file. A file may be followed by `:start=S,duration=D` (seconds: a stretch of a long clip)
+//! and, for BVH, `map=FILE.toml` (a joint map for a skeleton no built-in map fits):
+//! `01_01.bvh:start=4,duration=6,map=skeleton.toml`.
+
+use std::path::{Path, PathBuf};
+
+use crate::body_model::BodyModel;
+use crate::bvh;
+use crate::error::{Error, Result};
+use crate::forward::ShapedBody;
+use crate::library::MotionSpec;
+use crate::motion::{Motion, OUTPUT_FPS};
+
+/// The longest start offset or stretch a file motion may ask for, seconds (a day): beyond it
+/// a number is a typo.
+const MAX_STRETCH_SECONDS: f64 = 86_400.0;
+
+/// A file format a motion may come in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileFormat {
+    /// AMASS `.npz` (SMPL+H or SMPL-X poses, z up).
+    Amass,
+    /// BVH motion capture, retargeted to SMPL.
+    Bvh,
+}
+
+/// A motion file and the stretch of it to use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FileMotion {
+    /// The file.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: FileFormat,
+    /// Where the stretch starts, seconds from the file's first frame.
+    pub start: f64,
+    /// How long the stretch lasts, seconds (`None`: to the end).
+    pub duration: Option<f64>,
+    /// A BVH joint map file (`None`: the built-in map that fits).
+    pub map: Option<PathBuf>,
+}
+
+/// A parsed motion argument.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MotionSource {
+    /// A built-in procedural motion.
+    Library(MotionSpec),
+    /// A motion file.
+    File(FileMotion),
+}
+
+/// A motion at 30 fps and, for BVH, what retargeting did.
+#[derive(Debug, Clone)]
+pub struct LoadedMotion {
+    /// The motion.
+    pub motion: Motion,
+    /// The retargeting report of a BVH file.
+    pub retarget: Option<bvh::Report>,
+}
+
+impl MotionSource {
+    /// Parses a motion argument (see the module documentation).
+    pub fn parse(text: &str) -> Result<Self> {
+        let lower = text.to_ascii_lowercase();
+        for (extension, format) in [(".bvh", FileFormat::Bvh), (".npz", FileFormat::Amass)] {
+            if lower.ends_with(extension) {
+                return FileMotion::with_parameters(text, format, "").map(Self::File);
+            }
+            if let Some(at) = lower.rfind(&format!("{extension}:")) {
+                let (path, parameters) = text.split_at(at + extension.len());
+                return FileMotion::with_parameters(path, format, &parameters[1..]).map(Self::File);
+            }
+        }
+        let path = Path::new(text);
+        if path.exists() {
+            let (mut file, _) = files::open(path)?;
+            let mut head = [0u8; 9];
+            let read = std::io::Read::read(&mut file, &mut head).unwrap_or(0);
+            let format = if &head[..read] == b"HIERARCHY" {
+                FileFormat::Bvh
+            } else {
+                FileFormat::Amass
+            };
+            return FileMotion::with_parameters(text, format, "").map(Self::File);
+        }
+        MotionSpec::parse(text).map(Self::Library)
+    }
+
+    /// Loads the motion at 30 fps for the shaped body `shaped` of `model`.
+    ///
+    /// A BVH motion is placed on the floor: its first frame's lowest body point at y = 0 and
+    /// its pelvis over the origin. An AMASS motion keeps its own placement.
+    pub fn load(&self, model: &BodyModel, shaped: &ShapedBody) -> Result<LoadedMotion> {
+        let file = match self {
+            Self::Library(spec) => {
+                return Ok(LoadedMotion {
+                    motion: spec.generate(model, shaped)?,
+                    retarget: None,
+                });
+            }
+            Self::File(file) => file,
+        };
+        let (raw, retarget) = match file.format {
+            FileFormat::Amass => (crate::amass::load(&file.path, shaped.joints[0])?, None),
+            FileFormat::Bvh => {
+                let r = bvh::load(&file.path, file.map.as_deref(), shaped)?;
+                (r.motion, Some(r.report))
+            }
+        };
+        let mut motion = file.stretch(&raw.resample(OUTPUT_FPS)?)?;
+        motion.name = file.label();
+        if retarget.is_some() {
+            place_on_floor(&mut motion, model, shaped)?;
+        }
+        Ok(LoadedMotion { motion, retarget })
+    }
+}
+
+impl FileMotion {
+    fn with_parameters(path: &str, format: FileFormat, parameters: &str) -> Result<Self> {
+        let bad = |reason: String| Error::UnknownMotion {
+            name: format!("{path}:{parameters}"),
+            reason,
+        };
+        let mut file = FileMotion {
+            path: PathBuf::from(path),
+            format,
+            start: 0.0,
+            duration: None,
+            map: None,
+        };
+        for kv in parameters.split(',').filter(|s| !s.trim().is_empty()) {
+            let (key, value) = kv
+                .split_once('=')
+                .ok_or_else(|| bad(format!("'{kv}' is not key=value")))?;
+            let (key, value) = (key.trim(), value.trim());
+            let seconds = || match value.parse::<f64>() {
+                Ok(v) if v.is_finite() && (0.0..=MAX_STRETCH_SECONDS).contains(&v) => Ok(v),
+                _ => Err(bad(format!(
+                    "{key} = '{value}' is not a number of seconds from 0 to {MAX_STRETCH_SECONDS}"
+                ))),
+            };
+            match key {
+                "start" => file.start = seconds()?,
+                "duration" => {
+                    let d = seconds()?;
+                    if d < 1.0 / OUTPUT_FPS {
+                        return Err(bad(format!(
+                            "duration = {d} s is shorter than one frame at 30 fps"
+                        )));
+                    }
+                    file.duration = Some(d);
+                }
+                "map" if format == FileFormat::Bvh => file.map = Some(PathBuf::from(value)),
+                other => {
+                    let keys = match format {
+                        FileFormat::Bvh => "start, duration, map",
+                        FileFormat::Amass => "start, duration",
+                    };
+                    return Err(bad(format!("unknown parameter '{other}' ({keys})")));
+                }
+            }
+        }
+        Ok(file)
+    }
+
+    /// The canonical text form: the path, then the parameters that differ from the defaults.
+    pub fn label(&self) -> String {
+        let mut parts = Vec::new();
+        if self.start != 0.0 {
+            parts.push(format!("start={}", self.start));
+        }
+        if let Some(d) = self.duration {
+            parts.push(format!("duration={d}"));
+        }
+        if let Some(map) = &self.map {
+            parts.push(format!("map={}", map.display()));
+        }
+        match parts.is_empty() {
+            true => self.path.display().to_string(),
+            false => format!("{}:{}", self.path.display(), parts.join(",")),
+        }
+    }
+
+    /// The stretch of a 30 fps motion this file motion asks for.
+    fn stretch(&self, motion: &Motion) -> Result<Motion> {
+        if self.start == 0.0 && self.duration.is_none() {
+            return Ok(motion.clone());
+        }
+        let first = (self.start * OUTPUT_FPS).round() as usize;
+        let available = motion.len().saturating_sub(first);
+        let count = self
+            .duration
+            .map_or(available, |d| (d * OUTPUT_FPS).round().max(1.0) as usize);
+        if available == 0 || count > available {
+            return Err(Error::UnknownMotion {
+                name: self.path.display().to_string(),
+                reason: format!(
+                    "start = {} s{} runs past the end of the motion ({:.2} s)",
+                    self.start,
+                    self.duration
+                        .map_or(String::new(), |d| format!(" with duration = {d} s")),
+                    motion.duration()
+                ),
+            });
+        }
+        let mut out = Motion::new(
+            motion.name.clone(),
+            motion.fps,
+            motion.frames[first..first + count].to_vec(),
+        )?;
+        out.betas = motion.betas.clone();
+        out.gender = motion.gender.clone();
+        Ok(out)
+    }
+}
+
+/// Moves a motion so its first frame stands on the floor: the body's lowest point at y = 0
+/// and the pelvis over the origin (x = z = 0).
+pub fn place_on_floor(motion: &mut Motion, model: &BodyModel, shaped: &ShapedBody) -> Result<()> {
+    let first = model.pose(shaped, &motion.frames[0])?;
+    let lowest = first
+        .vertices
+        .iter()
+        .fold(f64::INFINITY, |low, v| low.min(v[1]));
+    let pelvis = first.joints[0];
+    for frame in &mut motion.frames {
+        frame.transl[0] -= pelvis[0];
+        frame.transl[1] -= lowest;
+        frame.transl[2] -= pelvis[2];
+    }
+    Ok(())
+}
