@@ -201,13 +201,12 @@ fn known_angles_and_root_path_come_back_exactly() {
         // The root path, relative to the first frame (placement moves the whole path).
         let t = k as f64 / 30.0;
         let expected = [0.0, 0.02 * (3.0 * t).sin(), 0.5 * t];
-        for c in 0..3 {
+        for (c, want) in expected.into_iter().enumerate() {
             let moved = frame.transl[c] - motion.frames[0].transl[c];
             // Resampling 60 -> 30 fps lands on source frames: exact but for rounding.
             assert!(
-                (moved - expected[c]).abs() < 1e-9,
-                "frame {k} axis {c}: {moved} vs {}",
-                expected[c]
+                (moved - want).abs() < 1e-9,
+                "frame {k} axis {c}: {moved} vs {want}"
             );
         }
     }

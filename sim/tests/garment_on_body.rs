@@ -131,9 +131,11 @@ fn self_contact_keeps_a_long_skirt_on_a_walking_body_from_passing_through_itself
     );
 }
 
-/// Every frame of the skirt on a short walk (garment, deepest penetration, retries) and the
-/// frames the run retried.
-fn walk_frames(max_penetration_jump: f64) -> (Vec<(Vec<[f64; 3]>, f64, usize)>, usize) {
+/// One frame of a run: the garment's vertices, its deepest penetration (m), its retries.
+type FrameRecord = (Vec<[f64; 3]>, f64, usize);
+
+/// Every frame of the skirt on a short walk and the frames the run retried.
+fn walk_frames(max_penetration_jump: f64) -> (Vec<FrameRecord>, usize) {
     let model = BodyModel::default_body();
     let solver = SolverParams {
         substeps: 1,

@@ -255,7 +255,7 @@ impl JointMap {
     /// Each mapped SMPL joint's nearest mapped SMPL ancestor must drive a BVH ancestor of its
     /// BVH joint: otherwise the retargeted limbs would hang from the wrong bones.
     fn check_hierarchy(&self, bvh: &Bvh, path: &Path) -> Result<()> {
-        for j in 1..NUM_JOINTS {
+        for (j, smpl_name) in JOINT_NAMES.iter().enumerate().skip(1) {
             let Some(k) = self.bvh_joint[j] else { continue };
             let Some(ancestor) = self.mapped_ancestor(j) else {
                 continue;
@@ -273,10 +273,7 @@ impl JointMap {
                     path: path.to_path_buf(),
                     problem: format!(
                         "{} -> '{}' is not below {} -> '{}' in the BVH hierarchy",
-                        JOINT_NAMES[j],
-                        bvh.joints[k].name,
-                        JOINT_NAMES[ancestor],
-                        bvh.joints[a].name
+                        smpl_name, bvh.joints[k].name, JOINT_NAMES[ancestor], bvh.joints[a].name
                     ),
                 });
             }

@@ -146,7 +146,7 @@ split = "train"
             folder.path().join("out"),
         );
         shard(&a, &spec, &planned, &[0]);
-        let e = merge(&out, &[a.clone()]).unwrap_err();
+        let e = merge(&out, std::slice::from_ref(&a)).unwrap_err();
         assert!(e.to_string().contains("1 of 2 planned sequences"), "{e}");
         assert!(
             !out.exists(),
