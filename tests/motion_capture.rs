@@ -161,3 +161,87 @@ fn a_top_simulates_through_cmu_01_01() {
     assert!(depth <= 0.010, "{depth} m into the body: {j}");
     assert!(j["max_edge_stretch"].as_f64().unwrap() < 1.5, "{j}");
 }
+
+/// A dataset spec that trains on one stretch of `01_01` and holds another out: both
+/// synthesize, under their stretch's name, and a stretch past the clip's end is refused
+/// before the folder is made.
+#[test]
+fn stretches_of_a_clip_are_dataset_motions() {
+    let Some(clip) = cmu_clip("motion_capture::stretches_of_a_clip_are_dataset_motions") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let spec = |variants: &str| {
+        format!(
+            r#"
+name = "cmu"
+seed = 3
+[sequence]
+frames = 20
+blend_frames = 10
+settle_frames = 4
+shapes_per_motion = 1
+draws_per_shape = 1
+[solver]
+substeps = 2
+max_iterations = 8
+[[garments]]
+name = "skirt"
+split = "train"
+[[motions]]
+source = "{clip}"
+variants = [{variants}]
+split = "train"
+[[motions]]
+source = "{clip}:start=12,duration=1"
+split = "test"
+[splits]
+test_motion = 1
+"#,
+            clip = clip.display()
+        )
+    };
+    let path = dir.path().join("spec.toml");
+    std::fs::write(&path, spec(r#""start=0,duration=1""#)).unwrap();
+    let out = dir.path().join("data");
+    ok(&[
+        "synth",
+        "--spec",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let lines = common::jsonl(&out.join("manifest.jsonl"));
+    assert_eq!(lines.len(), 2);
+    let motions: Vec<&str> = lines
+        .iter()
+        .map(|l| l["motion"].as_str().unwrap())
+        .collect();
+    assert!(
+        motions.iter().any(|m| m.ends_with("01_01.bvh:start=0,duration=1")),
+        "{motions:?}"
+    );
+    assert!(
+        motions
+            .iter()
+            .any(|m| m.ends_with("01_01.bvh:start=12,duration=1")),
+        "{motions:?}"
+    );
+    assert!(lines.iter().all(|l| l["status"] == "ok"), "{lines:?}");
+
+    std::fs::write(&path, spec(r#""start=22,duration=3""#)).unwrap();
+    let refused = dir.path().join("refused");
+    let err = common::fails(&[
+        "synth",
+        "--spec",
+        path.to_str().unwrap(),
+        "--out",
+        refused.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("start=22") && err.contains("past the end"),
+        "{err}"
+    );
+    assert!(!refused.exists());
+}
