@@ -219,7 +219,9 @@ test_motion = 1
         .map(|l| l["motion"].as_str().unwrap())
         .collect();
     assert!(
-        motions.iter().any(|m| m.ends_with("01_01.bvh:start=0,duration=1")),
+        motions
+            .iter()
+            .any(|m| m.ends_with("01_01.bvh:start=0,duration=1")),
         "{motions:?}"
     );
     assert!(
