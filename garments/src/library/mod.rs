@@ -10,8 +10,10 @@
 
 use serde_json::{Value, json};
 
+mod family;
 mod summary;
 mod variants;
+pub use family::Family;
 pub use summary::DesignSummary;
 pub use variants::{MAX_INDEX, NamedDesign, naming, resolve, variant_name};
 
