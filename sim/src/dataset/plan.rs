@@ -156,6 +156,19 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             .and_then(|n| n.checked_mul(s.draws_per_shape)),
         |total, n| total.and_then(|t| t.checked_add(n)),
     )
+    .and_then(|t| {
+        let garments: usize = spec
+            .garments
+            .iter()
+            .filter(|g| g.split == Tag::Test)
+            .map(|g| g.names().count())
+            .sum();
+        let motions = motions.iter().filter(|m| m.1 == Tag::Test).count();
+        garments
+            .checked_mul(motions)
+            .and_then(|n| n.checked_mul(sp.test_grid_shapes))
+            .and_then(|n| t.checked_add(n))
+    })
     .filter(|&n| n <= MAX_PLANNED_SEQUENCES);
     if count.is_none() {
         return Err(Error::value(
@@ -288,6 +301,27 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             out.push(sequence(split, key, name, garment, motion, b, m));
         }
     }
+    // The test grid: every held-out garment x every held-out motion x its shapes.
+    for garment in garments_tagged(Tag::Test) {
+        for motion in motions_tagged(Tag::Test) {
+            for shape in 0..sp.test_grid_shapes {
+                let key = format!("test_grid/{garment}/{motion}/shape{shape}");
+                let mut r = rng(spec.seed, &key);
+                let b = betas(&mut r, s.betas, test_betas);
+                let m = material(&mut r, &test_material);
+                let name = format!("{}-{}-s{shape}", slug(garment), slug(motion));
+                out.push(sequence(
+                    "test_grid",
+                    key,
+                    name,
+                    garment.clone(),
+                    motion.clone(),
+                    b,
+                    m,
+                ));
+            }
+        }
+    }
     Ok(out)
 }
 
@@ -327,10 +361,57 @@ mod tests {
                 test_motion: 1,
                 test_shape: 1,
                 test_material: 1,
+                test_grid_shapes: 0,
                 test_betas_range: Some([1.5, 2.0]),
                 test_material_ranges: None,
             },
         }
+    }
+
+    #[test]
+    fn a_test_grid_covers_every_held_out_garment_motion_and_shape() {
+        let mut spec = spec();
+        spec.garments.push(GarmentEntry {
+            name: "d".into(),
+            split: Tag::Test,
+            variants: 0,
+            wide_variants: 0,
+        });
+        spec.motions.push(MotionEntry {
+            source: "sway".into(),
+            variants: vec![],
+            split: Tag::Test,
+        });
+        spec.splits = SplitSpec {
+            test_grid_shapes: 2,
+            test_betas_range: Some([1.5, 2.0]),
+            ..Default::default()
+        };
+        let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
+        let grid: Vec<_> = planned.iter().filter(|p| p.split == "test_grid").collect();
+        assert_eq!(grid.len(), 2 * 2 * 2);
+        for garment in ["c", "d"] {
+            for motion in ["kick", "sway"] {
+                let cells: Vec<_> = grid
+                    .iter()
+                    .filter(|p| p.garment == garment && p.motion == motion)
+                    .collect();
+                assert_eq!(cells.len(), 2, "{garment} x {motion}");
+                assert_ne!(cells[0].betas, cells[1].betas, "two shapes");
+                assert!(cells.iter().all(|p| p.betas.iter().all(|b| *b >= 1.5)));
+            }
+        }
+        // A grid alone needs no training entries.
+        spec.garments.retain(|g| g.split == Tag::Test);
+        spec.motions.retain(|m| m.split == Tag::Test);
+        let text = toml::to_string(&spec).unwrap();
+        let alone = DatasetSpec::parse(&text, std::path::Path::new("grid.toml")).unwrap();
+        let planned = plan(&alone, &expand_motions(&alone).unwrap()).unwrap();
+        assert_eq!(planned.len(), 8);
+        spec.splits.test_grid_shapes = 0;
+        let text = toml::to_string(&spec).unwrap();
+        let err = DatasetSpec::parse(&text, std::path::Path::new("grid.toml")).unwrap_err();
+        assert!(err.to_string().contains("split = \"train\""), "{err}");
     }
 
     #[test]

@@ -253,6 +253,9 @@ pub struct SplitSpec {
     pub test_shape: usize,
     /// Only the material unseen (drawn from `test_material`).
     pub test_material: usize,
+    /// The test grid: every test garment x every test motion x this many shapes (from
+    /// `test_betas_range`), materials from `test_material_ranges` (split `test_grid`).
+    pub test_grid_shapes: usize,
     /// Shapes of the shape-unseen and all-unseen sets (default: the training range).
     pub test_betas_range: Option<[f64; 2]>,
     /// Materials of the material-unseen and all-unseen sets (default: the training ranges).
@@ -337,6 +340,7 @@ impl DatasetSpec {
             ("splits.test_motion", sp.test_motion),
             ("splits.test_shape", sp.test_shape),
             ("splits.test_material", sp.test_material),
+            ("splits.test_grid_shapes", sp.test_grid_shapes),
         ] {
             if n > MAX_PLANNED_SEQUENCES {
                 return Err(format!("{key} = {n} is more than {MAX_PLANNED_SEQUENCES}"));
@@ -465,6 +469,11 @@ impl DatasetSpec {
                 sp.test_material,
                 has(Tag::Train) && has_motion(Tag::Train),
             ),
+            (
+                "splits.test_grid_shapes",
+                sp.test_grid_shapes,
+                has(Tag::Test) && has_motion(Tag::Test),
+            ),
         ];
         for (key, n, ok) in needs {
             if n > 0 && !ok {
@@ -473,9 +482,35 @@ impl DatasetSpec {
                 ));
             }
         }
-        if !has(Tag::Train) || !has_motion(Tag::Train) {
-            return Err("at least one garment and one motion must have split = \"train\"".into());
+        // A test grid alone (a validation or test set) needs no training entries; anything
+        // else draws from them.
+        let grid_only = sp.test_grid_shapes > 0 && !has(Tag::Train) && !has_motion(Tag::Train);
+        if !grid_only && (!has(Tag::Train) || !has_motion(Tag::Train)) {
+            return Err(
+                "at least one garment and one motion must have split = \"train\" \
+                        (or, for a test grid alone, none)"
+                    .into(),
+            );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_spec_in_the_specs_folder_parses() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../specs");
+        let mut count = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                DatasetSpec::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                count += 1;
+            }
+        }
+        assert!(count >= 10, "{count} specs");
     }
 }
