@@ -374,6 +374,16 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
         }
         assert_eq!(rows[method]["sequences"], 1);
     }
+    // Per garment family and per motion: one sequence, so each group's row is the split's.
+    for group in ["families", "motions"] {
+        let groups = j[group]["test_motion"].as_object().unwrap();
+        assert_eq!(groups.len(), 1, "{group}: {groups:?}");
+        let row = groups.values().next().unwrap();
+        assert_eq!(row["lbs"]["E_v"], rows["lbs"]["E_v"], "{group}");
+    }
+    let garment = j["sequences"][0]["garment"].as_str().unwrap();
+    let family = j["family_of_garment"][garment].as_str().unwrap();
+    assert!(j["families"]["test_motion"][family].is_object(), "{family}");
     let simulation = &j["simulation"]["test_motion"];
     for key in [
         "inside_percent",

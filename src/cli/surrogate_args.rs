@@ -70,7 +70,7 @@ pub struct EvaluateArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "test,test_garment,test_motion,test_shape,test_material"
+        default_value = "test,test_garment,test_motion,test_shape,test_material,test_grid"
     )]
     pub splits: Vec<String>,
     #[command(flatten)]

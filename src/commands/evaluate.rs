@@ -10,7 +10,9 @@ use serde_json::{Value, json};
 use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
-use surrogate::evaluate::tables::{aggregate, text_table};
+use surrogate::evaluate::tables::{
+    aggregate, aggregate_by, family_of, grouped_text_table, text_table,
+};
 use surrogate::evaluate::{Evaluation, describe_model, document, fingerprint, select};
 use surrogate::predict::{Predictor, Settings};
 use surrogate::run::TrainedModel;
@@ -109,5 +111,17 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         reused
     );
     say_part!("{}", text_table(splits));
+    // Per garment family and per motion within each split, where a split has several.
+    for (label, groups) in [
+        (
+            "family",
+            aggregate_by(&results, |r| family_of(&r.garment).to_string()),
+        ),
+        ("motion", aggregate_by(&results, |r| r.motion.clone())),
+    ] {
+        if groups.values().any(|g| g.len() > 1) {
+            say_part!("\n{}", grouped_text_table(label, &groups));
+        }
+    }
     Ok(())
 }

@@ -14,7 +14,7 @@ use serde_json::{Value, json};
 use sim::dataset::ManifestRecord;
 
 use super::baselines::{self, Baseline, FloorMaps};
-use super::tables::{Rows, SequenceResult, paper_numbers};
+use super::tables::{Rows, SequenceResult, aggregate_by, family_of, paper_numbers};
 use super::{Method, Truth};
 use crate::data::Sequence;
 use crate::error::{Error, Result, file_error};
@@ -123,7 +123,8 @@ pub fn fingerprint(
 }
 
 /// The whole of an evaluation as `evaluate --json` writes it: the rows of every split and the
-/// simulation's (`rows`, [`super::tables::aggregate`] of `results`), every sequence's result, the model
+/// simulation's (`rows`, [`super::tables::aggregate`] of `results`), the rows of every garment
+/// family and every motion within each split, every sequence's result, the model
 /// ([`describe_model`]), the settings (`settings`, to which the sampler's and the protocol are
 /// added), the units and the paper's numbers.
 pub fn document(
@@ -146,9 +147,17 @@ pub fn document(
     ] {
         settings[key] = value;
     }
+    let families = aggregate_by(results, |r| family_of(&r.garment).to_string());
+    let motions = aggregate_by(results, |r| r.motion.clone());
+    let family_of_garment: BTreeMap<&str, &str> = results
+        .iter()
+        .map(|r| (r.garment.as_str(), family_of(&r.garment)))
+        .collect();
     json!({
-        "splits": splits, "simulation": simulation, "sequences": results, "model": model,
-        "settings": settings, "units": super::units(), "paper": paper_numbers(),
+        "splits": splits, "families": families, "motions": motions,
+        "family_of_garment": family_of_garment, "simulation": simulation,
+        "sequences": results, "model": model, "settings": settings, "units": super::units(),
+        "paper": paper_numbers(),
     })
 }
 

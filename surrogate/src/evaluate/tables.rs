@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+use garments::library::Family;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 
@@ -38,47 +39,99 @@ pub type Rows = (SplitRows, BTreeMap<String, MethodScores>);
 
 /// The short table `evaluate` prints: one line per split and method.
 pub fn text_table(splits: &SplitRows) -> String {
+    grouped_text_table("split", &BTreeMap::from([(String::new(), splits.clone())]))
+}
+
+/// The table of a split's groups (families or motions): one line per split, group and
+/// method; `label` names the group column.
+pub fn grouped_text_table(label: &str, groups: &GroupRows) -> String {
     let mut text = format!(
-        "{:<14} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}\n",
-        "split", "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
+        "{:<14} {:<18} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}\n",
+        "split", label, "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
     );
-    for (split, methods) in splits {
-        for (m, r) in methods {
-            text += &format!(
-                "{:<14} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}\n",
-                split,
-                m.name(),
-                r.scores.E_v,
-                r.scores.E_c,
-                r.inside_percent,
-                r.stretch_p99,
-                r.jitter,
-                r.fps
-            );
+    if groups.keys().all(String::is_empty) {
+        text = text.replacen(&format!("{:<14} ", "split"), "", 1);
+    }
+    for (split, rows) in groups {
+        for (group, methods) in rows {
+            for (m, r) in methods {
+                if !split.is_empty() {
+                    text += &format!("{split:<14} ");
+                }
+                text += &format!(
+                    "{:<18} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}\n",
+                    group,
+                    m.name(),
+                    r.scores.E_v,
+                    r.scores.E_c,
+                    r.inside_percent,
+                    r.stretch_p99,
+                    r.jitter,
+                    r.fps
+                );
+            }
         }
     }
     text
 }
 
+/// Per split, then per group (a family or a motion): the mean row of every method.
+pub type GroupRows = BTreeMap<String, SplitRows>;
+
+/// The family of a sequence's garment, decided from its design
+/// ([`garments::library::Family`]); `other` for template files and patterns.
+pub fn family_of(garment: &str) -> &'static str {
+    Family::of_garment(garment).map_or("other", Family::name)
+}
+
+/// The mean rows of every method per split and per group of `key` within it.
+pub fn aggregate_by(
+    results: &[SequenceResult],
+    key: impl Fn(&SequenceResult) -> String,
+) -> GroupRows {
+    let mut rows: BTreeMap<String, BTreeMap<String, BTreeMap<Method, Vec<MethodScores>>>> =
+        BTreeMap::new();
+    for r in results {
+        let group = rows
+            .entry(r.split.clone())
+            .or_default()
+            .entry(key(r))
+            .or_default();
+        for (m, s) in &r.methods {
+            group.entry(*m).or_default().push(*s);
+        }
+    }
+    rows.into_iter()
+        .map(|(split, groups)| {
+            let groups = groups
+                .into_iter()
+                .map(|(g, methods)| {
+                    let means = methods
+                        .into_iter()
+                        .map(|(m, v)| (m, MethodScores::mean(&v)))
+                        .collect();
+                    (g, means)
+                })
+                .collect();
+            (split, groups)
+        })
+        .collect()
+}
+
 /// The mean rows of every split and method, and the simulation's per split.
 pub fn aggregate(results: &[SequenceResult]) -> Rows {
-    let mut rows: BTreeMap<String, BTreeMap<Method, Vec<MethodScores>>> = BTreeMap::new();
     let mut simulation: BTreeMap<String, Vec<MethodScores>> = BTreeMap::new();
     for r in results {
-        for (m, s) in &r.methods {
-            let split = rows.entry(r.split.clone()).or_default();
-            split.entry(*m).or_default().push(*s);
-        }
         simulation
             .entry(r.split.clone())
             .or_default()
             .push(r.simulation);
     }
-    let mean = |v: Vec<MethodScores>| MethodScores::mean(&v);
-    let splits = rows
+    let splits = aggregate_by(results, |_| String::new())
         .into_iter()
-        .map(|(s, m)| (s, m.into_iter().map(|(k, v)| (k, mean(v))).collect()))
+        .map(|(split, mut groups)| (split, groups.remove("").unwrap_or_default()))
         .collect();
+    let mean = |v: Vec<MethodScores>| MethodScores::mean(&v);
     let simulation = simulation.into_iter().map(|(k, v)| (k, mean(v))).collect();
     (splits, simulation)
 }
