@@ -87,6 +87,30 @@ impl MotionSource {
         MotionSpec::parse(text).map(Self::Library)
     }
 
+    /// The canonical text form (`walk:speed=1` and `walk` are both `walk`; a file's
+    /// parameters in a fixed order, defaults left out).
+    pub fn label(&self) -> String {
+        match self {
+            Self::Library(spec) => spec.label(),
+            Self::File(file) => file.label(),
+        }
+    }
+
+    /// What the motion is, for telling two spellings of one motion apart from two motions:
+    /// [`MotionSource::label`] with a file's path made absolute where the file exists.
+    pub fn identity(&self) -> String {
+        match self {
+            Self::Library(spec) => spec.label(),
+            Self::File(file) => {
+                let mut file = file.clone();
+                if let Ok(path) = std::fs::canonicalize(&file.path) {
+                    file.path = path;
+                }
+                file.label()
+            }
+        }
+    }
+
     /// Loads the motion at 30 fps for the shaped body `shaped` of `model`.
     ///
     /// A BVH motion is placed on the floor: its first frame's lowest body point at y = 0 and

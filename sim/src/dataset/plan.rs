@@ -125,12 +125,31 @@ pub fn expand_motions(spec: &DatasetSpec) -> Result<Vec<(String, Tag)>> {
             }
         }
     }
-    let mut seen = std::collections::HashSet::new();
-    if let Some((m, _)) = out.iter().find(|(m, _)| !seen.insert(m.clone())) {
-        return Err(Error::Spec {
-            path: String::new(),
-            message: format!("motions: '{m}' is listed twice"),
-        });
+    // Two spellings of one motion (`walk` and `walk:speed=1`, `random:seed=01`, `./a.bvh`) are
+    // one motion: listed twice it is refused, and in train and test it would be a leak.
+    let mut seen: std::collections::HashMap<String, &(String, Tag)> = Default::default();
+    for entry in &out {
+        let (text, tag) = entry;
+        let identity =
+            motions::MotionSource::parse(text).map_or_else(|_| text.clone(), |m| m.identity());
+        if let Some((first, first_tag)) = seen.insert(identity.clone(), entry) {
+            let message = if first_tag == tag {
+                format!(
+                    "motions: '{first}' and '{text}' are the same motion ({identity}), listed twice"
+                )
+            } else {
+                format!(
+                    "motions: '{first}' ({}) and '{text}' ({}) are the same motion ({identity}): \
+                     a train/test leak",
+                    first_tag.name(),
+                    tag.name()
+                )
+            };
+            return Err(Error::Spec {
+                path: String::new(),
+                message,
+            });
+        }
     }
     Ok(out)
 }
@@ -486,5 +505,36 @@ mod tests {
         assert_eq!(m.len(), 4);
         spec.motions.push(spec.motions[1].clone());
         assert!(expand_motions(&spec).is_err());
+        // Two spellings of one motion: twice on one side, or a leak across the split.
+        let mut spec = self::spec();
+        spec.motions.push(MotionEntry {
+            source: "run:speed=1".into(),
+            variants: vec![],
+            split: Tag::Train,
+        });
+        let e = expand_motions(&spec).unwrap_err().to_string();
+        assert!(
+            e.contains("'run' and 'run:speed=1' are the same motion (run), listed twice"),
+            "{e}"
+        );
+        spec.motions.pop();
+        spec.motions.push(MotionEntry {
+            source: "walk".into(),
+            variants: vec!["amplitude=1".into()],
+            split: Tag::Test,
+        });
+        let e = expand_motions(&spec).unwrap_err().to_string();
+        assert!(
+            e.contains("'walk' (train) and 'walk:amplitude=1' (test) are the same motion (walk): a train/test leak"),
+            "{e}"
+        );
+        spec.motions.pop();
+        spec.motions.push(MotionEntry {
+            source: "random".into(),
+            variants: vec!["seed=1".into(), "seed=01".into()],
+            split: Tag::Test,
+        });
+        let e = expand_motions(&spec).unwrap_err().to_string();
+        assert!(e.contains("(random:seed=1)"), "{e}");
     }
 }

@@ -46,6 +46,16 @@ pub enum Tag {
     Test,
 }
 
+impl Tag {
+    /// The tag as written in specs: `train` or `test`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tag::Train => "train",
+            Tag::Test => "test",
+        }
+    }
+}
+
 /// Sequence length and sampling counts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
