@@ -454,6 +454,30 @@ pub enum DatasetCommand {
         #[arg(long)]
         quiet: bool,
     },
+    /// The ground truth's own spread: each finished sequence simulated again from its
+    /// recording's configuration with one setting nudged, and scored against the recording
+    /// as `evaluate` scores a prediction (per split, garment family and motion).
+    Spread {
+        /// Dataset folder.
+        dir: PathBuf,
+        /// Splits to rerun, comma-separated (default: all).
+        #[arg(long, value_delimiter = ',')]
+        splits: Vec<String>,
+        /// What changes: `k_s` (1% stiffer), `substeps` (one more), `iterations` (one more
+        /// per substep) or `none` (the engine is deterministic: zero but for f32 rounding).
+        #[arg(long, default_value = "k_s")]
+        perturb: String,
+        /// At most this many sequences (the first in the manifest).
+        #[arg(long)]
+        max_sequences: Option<usize>,
+        /// Write `splits`, `families`, `motions` (rows of the `resimulated` method, keys as
+        /// `evaluate`'s) and `sequences` here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Merge shard folders (or one shared folder) into OUT and write its manifest; refuses
     /// while any planned sequence is unfinished.
     Merge {

@@ -324,6 +324,36 @@ fn bad_inputs_are_named_and_leave_nothing() {
     );
 }
 
+/// The ground truth's spread: the same configuration simulated again gives the same frames
+/// (zero but for the recording's f32 rounding), 1% stiffer cloth gives a small non-zero difference, scored with evaluate's keys.
+#[test]
+fn dataset_spread_is_zero_unperturbed_and_small_with_stiffer_cloth() {
+    let f = fixture();
+    let data = f.dir.join("data");
+    let dir = tempfile::tempdir().unwrap();
+    let e_v = |perturb: &str| {
+        let out = dir.path().join(format!("{perturb}.json"));
+        let args = ["dataset", "spread", s(&data), "--splits", "test_motion"];
+        ok(&[
+            &args[..],
+            &["--perturb", perturb, "--json", s(&out), "--quiet"],
+        ]
+        .concat());
+        let j = json(&out);
+        let row = &j["splits"]["test_motion"]["resimulated"];
+        assert_eq!(row["sequences"], 1, "{j}");
+        assert!(j["families"]["test_motion"].is_object() && j["units"]["E_v"].is_string());
+        row["E_v"].as_f64().unwrap()
+    };
+    // The engine is deterministic; the recording keeps positions as f32 (1e-7 m).
+    let same = e_v("none");
+    assert!(same < 1e-4, "{same} cm");
+    let stiffer = e_v("k_s");
+    assert!(stiffer > 0.0 && stiffer < 2.0, "{stiffer} cm");
+    let e = common::fails(&["dataset", "spread", s(&data), "--perturb", "gravity"]);
+    assert!(e.contains("--perturb gravity"), "{e}");
+}
+
 #[test]
 fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
     let f = fixture();

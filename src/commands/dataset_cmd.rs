@@ -1,4 +1,4 @@
-//! `dit-garment dataset verify | stats | merge`: checking, summarizing and merging dataset
+//! `dit-garment dataset verify | stats | merge | tensors` (`spread` in `spread.rs`): checking, summarizing and merging dataset
 //! folders written by `synth` (layout in `synth.rs` and docs/DATASETS.md).
 
 use std::path::Path;
@@ -17,6 +17,21 @@ pub fn run(command: DatasetCommand) -> Result<()> {
         DatasetCommand::Verify { dir, json } => verify(&dir, json.as_deref()),
         DatasetCommand::Stats { dir, json } => stats_cmd(&dir, json.as_deref()),
         DatasetCommand::Merge { out, dirs } => merge(&out, &dirs),
+        DatasetCommand::Spread {
+            dir,
+            splits,
+            perturb,
+            max_sequences,
+            json,
+            quiet,
+        } => crate::commands::spread::spread(
+            &dir,
+            &splits,
+            crate::commands::spread::Perturbation::parse(&perturb)?,
+            max_sequences,
+            json.as_deref(),
+            quiet,
+        ),
         DatasetCommand::Tensors {
             dir,
             out,

@@ -29,6 +29,7 @@ mod predict;
 mod regress;
 mod render;
 mod simulate;
+mod spread;
 mod synth;
 mod train;
 mod uv;
@@ -79,9 +80,9 @@ fn check_outputs(command: &Command) -> Result<()> {
         Command::View(a) => (vec![Some(a.out.as_path())], vec![]),
         Command::Synth(a) => (vec![a.json.as_deref()], vec![a.out.as_deref()]),
         Command::Dataset { command } => match command {
-            DatasetCommand::Verify { json, .. } | DatasetCommand::Stats { json, .. } => {
-                (vec![json.as_deref()], vec![])
-            }
+            DatasetCommand::Verify { json, .. }
+            | DatasetCommand::Stats { json, .. }
+            | DatasetCommand::Spread { json, .. } => (vec![json.as_deref()], vec![]),
             DatasetCommand::Tensors { out, .. } | DatasetCommand::Merge { out, .. } => {
                 (vec![], vec![Some(out.as_path())])
             }

@@ -41,17 +41,20 @@ pub enum Method {
     Floor,
     /// The rest template carried by the root.
     Rest,
+    /// The engine again with a nudged setting (`dataset spread`): the ground truth's spread.
+    Resimulated,
 }
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Method; 6] = [
+    pub const ALL: [Method; 7] = [
         Method::Model,
         Method::ModelNoGuidance,
         Method::Lbs,
         Method::LbsNearest,
         Method::Floor,
         Method::Rest,
+        Method::Resimulated,
     ];
 
     /// The name used by flags and files.
@@ -63,6 +66,7 @@ impl Method {
             Method::LbsNearest => "lbs_nearest",
             Method::Floor => "floor",
             Method::Rest => "rest",
+            Method::Resimulated => "resimulated",
         }
     }
 
