@@ -247,3 +247,36 @@ test_motion = 1
     );
     assert!(!refused.exists());
 }
+
+/// The shipped surrogate poses a garment through a stretch of the capture.
+#[test]
+fn the_shipped_model_predicts_through_cmu_01_01() {
+    let Some(clip) = cmu_clip("motion_capture::the_shipped_model_predicts_through_cmu_01_01")
+    else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("predict.json");
+    let motion = format!("{}:start=6,duration=0.5", clip.display());
+    ok(&[
+        "predict",
+        "--model",
+        "builtin-single",
+        "--garment",
+        "tank_tight",
+        "--motion",
+        &motion,
+        "--blend-frames",
+        "3",
+        "--settle-frames",
+        "2",
+        "--out",
+        dir.path().join("p.mcap").to_str().unwrap(),
+        "--json",
+        stats.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let j = json(&stats);
+    assert_eq!(j["frames"], 20, "{j}");
+    assert_eq!(j["finite"], true, "{j}");
+}
