@@ -428,3 +428,49 @@ fn mesh_errors_name_vertices_as_the_file_numbers_them() {
         "{err}"
     );
 }
+
+/// Two outputs of one command may not be one file, and evaluate never writes into the dataset
+/// it reads: both refused before any work, naming the paths.
+#[test]
+fn outputs_over_outputs_or_inputs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.mcap");
+    let same = dir.path().join("sub/../x.mcap");
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let err = fails(&[
+        "simulate",
+        "--frames",
+        "100000",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+        same.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("two outputs of one command name one file"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let data = dir.path().join("data");
+    std::fs::create_dir(&data).unwrap();
+    std::fs::write(data.join("manifest.jsonl"), "").unwrap();
+    for (flag, path) in [
+        ("--json", data.join("manifest.jsonl")),
+        ("--report", data.clone()),
+    ] {
+        let err = fails(&[
+            "evaluate",
+            "--model",
+            "none",
+            "--data",
+            data.to_str().unwrap(),
+            flag,
+            path.to_str().unwrap(),
+        ]);
+        assert!(err.contains("inside the dataset folder"), "{flag}: {err}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(data.join("manifest.jsonl")).unwrap(),
+        ""
+    );
+}

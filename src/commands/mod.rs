@@ -113,6 +113,32 @@ fn check_outputs(command: &Command) -> Result<()> {
         ),
         Command::Evaluate(a) => (vec![a.json.as_deref()], vec![a.report.as_deref()]),
     };
+    let outputs: Vec<&Path> = files_out
+        .iter()
+        .chain(&folders_out)
+        .flatten()
+        .copied()
+        .collect();
+    for (i, a) in outputs.iter().enumerate() {
+        if let Some(b) = outputs[..i].iter().find(|b| resolved(b) == resolved(a)) {
+            anyhow::bail!(
+                "{} and {}: two outputs of one command name one file",
+                b.display(),
+                a.display()
+            );
+        }
+    }
+    // A command never writes into the dataset folder it reads.
+    if let Command::Evaluate(a) = command {
+        let data = resolved(&a.data);
+        if let Some(out) = outputs.iter().find(|o| resolved(o).starts_with(&data)) {
+            anyhow::bail!(
+                "{}: inside the dataset folder {} that evaluate reads; write it elsewhere",
+                out.display(),
+                a.data.display()
+            );
+        }
+    }
     for path in files_out.into_iter().flatten() {
         files::check_destination(path)?;
     }
@@ -120,4 +146,24 @@ fn check_outputs(command: &Command) -> Result<()> {
         files::check_folder_destination(path)?;
     }
     Ok(())
+}
+
+/// A path as the file system will resolve it: absolute, with its deepest existing ancestor's
+/// links and `..` resolved, so two spellings of one place compare equal.
+fn resolved(path: &Path) -> std::path::PathBuf {
+    let absolute = std::env::current_dir().map_or_else(|_| path.to_path_buf(), |d| d.join(path));
+    let mut rest = Vec::new();
+    let mut base = absolute.as_path();
+    loop {
+        if let Ok(real) = std::fs::canonicalize(base) {
+            return rest.iter().rev().fold(real, |p, c| p.join(c));
+        }
+        match (base.parent(), base.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                base = parent;
+            }
+            _ => return absolute,
+        }
+    }
 }
