@@ -474,3 +474,34 @@ fn outputs_over_outputs_or_inputs_are_refused() {
         ""
     );
 }
+
+/// Flags' own mistakes are blamed on the flag, not on the dataset or model they point at.
+#[test]
+fn empty_and_zero_flags_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.json");
+    let out = out.to_str().unwrap();
+    for (flags, expected) in [
+        (vec!["--max-sequences", "0"], "--max-sequences 0"),
+        (vec!["--splits", ""], "--splits holds an empty name"),
+    ] {
+        let mut args = vec![
+            "evaluate",
+            "--model",
+            "none",
+            "--data",
+            "/no/such/data",
+            "--json",
+            out,
+        ];
+        args.extend(flags);
+        let err = fails(&args);
+        assert!(err.contains(expected), "{err}");
+    }
+    let err = fails(&[
+        "evaluate", "--model", "", "--data", "/no/such", "--json", out,
+    ]);
+    assert!(err.contains("--model is empty"), "{err}");
+    let err = fails(&["motions", "show", "random:seed=18446744073709551616"]);
+    assert!(err.contains("from 0 to 18446744073709551615"), "{err}");
+}

@@ -134,10 +134,12 @@ impl MotionSpec {
                 if spec.name != "random" {
                     return Err(unknown("only `random` takes a seed".into()));
                 }
-                spec.seed = v
-                    .trim()
-                    .parse()
-                    .map_err(|_| unknown(format!("seed '{v}' is not a whole number")))?;
+                spec.seed = v.trim().parse().map_err(|_| {
+                    unknown(format!(
+                        "seed '{v}' is not a whole number from 0 to {}",
+                        u64::MAX
+                    ))
+                })?;
                 continue;
             }
             let value: f64 = v

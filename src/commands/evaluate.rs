@@ -27,6 +27,13 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     if args.json.is_none() && args.report.is_none() {
         bail!("nothing to write: give --json F and/or --report DIR");
     }
+    // The flags' own mistakes, before the dataset is read (and blamed).
+    if args.max_sequences == Some(0) {
+        bail!("--max-sequences 0: score at least 1 sequence (or leave the flag out for all)");
+    }
+    if args.splits.iter().any(|s| s.trim().is_empty()) {
+        bail!("--splits holds an empty name: give split names, comma-separated");
+    }
     let trained = match args.model.as_str() {
         "none" => None,
         name => Some(TrainedModel::load_named(name, &Device::flex())?),

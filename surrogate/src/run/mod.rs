@@ -52,6 +52,11 @@ pub fn model_dir(name: &str) -> Result<PathBuf> {
         }
         return Ok(dir);
     }
+    if name.trim().is_empty() {
+        return Err(Error::Invalid(
+            "--model is empty: give a run or ensemble folder, `builtin` or `builtin-single`".into(),
+        ));
+    }
     let dir = PathBuf::from(name);
     if !dir.is_dir() {
         return Err(Error::Config {
