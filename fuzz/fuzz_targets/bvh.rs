@@ -3,10 +3,20 @@
 #![no_main]
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use libfuzzer_sys::fuzz_target;
-use motions::BodyModel;
 use motions::bvh::{Bvh, JointMap, retarget};
+use motions::{BodyModel, ShapedBody};
+
+/// The default body, shaped once: loading it per input would leave little time for fuzzing.
+fn shaped() -> &'static ShapedBody {
+    static SHAPED: OnceLock<ShapedBody> = OnceLock::new();
+    SHAPED.get_or_init(|| {
+        let model = BodyModel::default_body();
+        model.shape(&[]).expect("the default body shapes")
+    })
+}
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
@@ -16,11 +26,9 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let _ = bvh.pose(0);
-    if let Ok(map) = JointMap::builtin_for(&bvh) {
-        let model = BodyModel::default_body();
-        let shaped = model.shape(&[]).expect("the default body shapes");
-        if let Ok(r) = retarget(&bvh, &map, &shaped) {
-            let _ = r.motion.resample(30.0);
-        }
+    if let Ok(map) = JointMap::builtin_for(&bvh)
+        && let Ok(r) = retarget(&bvh, &map, shaped())
+    {
+        let _ = r.motion.resample(30.0);
     }
 });
