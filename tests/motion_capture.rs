@@ -10,14 +10,7 @@ use std::path::PathBuf;
 use common::{json, ok};
 
 fn cmu_clip(test: &str) -> Option<PathBuf> {
-    let path = PathBuf::from("/usr/share/assimp/models/BVH/01_01.bvh");
-    testkit::available(
-        test,
-        "ASSIMP_TESTMODELS",
-        path.exists(),
-        "CMU's clips come with Debian's assimp-testmodels (apt-get install assimp-testmodels)",
-    )
-    .then_some(path)
+    testkit::cmu_clip(test, "01_01.bvh")
 }
 
 #[test]

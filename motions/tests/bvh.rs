@@ -10,6 +10,7 @@ use motions::bvh::{Bvh, JointMap, retarget};
 use motions::rotation::axis_angle_to_quat;
 use motions::{BodyModel, MotionSource, ShapedBody};
 use nalgebra::{UnitQuaternion, Vector3};
+use testkit::cmu_clip;
 
 /// CMU's names for the SMPL joints, and each one's SMPL joint (children after parents).
 const SKELETON: [(&str, usize); 24] = [
@@ -512,20 +513,6 @@ fn damaged_files_are_refused_naming_the_line() {
     assert!(err.contains("(start, duration)"), "{err}");
 }
 
-/// Debian's assimp-testmodels: CMU subject 1's clips (cgspeed's BVH conversion).
-const CMU: &str = "/usr/share/assimp/models/BVH";
-
-fn cmu_clip(test: &str, name: &str) -> Option<PathBuf> {
-    let path = Path::new(CMU).join(name);
-    testkit::available(
-        test,
-        "ASSIMP_TESTMODELS",
-        path.exists(),
-        "CMU's clips come with Debian's assimp-testmodels (apt-get install assimp-testmodels)",
-    )
-    .then_some(path)
-}
-
 #[test]
 fn cmu_01_01_retargets_to_an_upright_body_on_the_floor() {
     let Some(path) = cmu_clip(
@@ -561,7 +548,7 @@ fn cmu_01_01_retargets_to_an_upright_body_on_the_floor() {
             report.dropped
         );
     }
-    // About CMU's 0.056444 m per inch-ish unit, scaled by the default body's legs.
+    // Near CMU's nominal 0.056444 m per unit, scaled to the default body's legs.
     assert!(
         (0.045..0.065).contains(&report.metres_per_unit),
         "{}",

@@ -34,6 +34,22 @@ pub fn available(test: &str, what: &str, found: bool, reason: &str) -> bool {
     false
 }
 
+/// Where Debian's assimp-testmodels puts CMU's BVH clips (`01_01.bvh`, `01_03.bvh`).
+pub const CMU_CLIPS: &str = "/usr/share/assimp/models/BVH";
+
+/// The CMU clip `name` for the test `test`, or `None` (the skip recorded, as [`available`])
+/// where the package is not installed (`ASSIMP_TESTMODELS`).
+pub fn cmu_clip(test: &str, name: &str) -> Option<std::path::PathBuf> {
+    let path = std::path::Path::new(CMU_CLIPS).join(name);
+    available(
+        test,
+        "ASSIMP_TESTMODELS",
+        path.exists(),
+        "CMU's clips come with Debian's assimp-testmodels (apt-get install assimp-testmodels)",
+    )
+    .then_some(path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
