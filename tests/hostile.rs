@@ -505,3 +505,33 @@ fn empty_and_zero_flags_are_named() {
     let err = fails(&["motions", "show", "random:seed=18446744073709551616"]);
     assert!(err.contains("from 0 to 18446744073709551615"), "{err}");
 }
+
+/// Material values past the engine's bounds are refused by every command that takes them,
+/// before any work: `predict` no longer turns k_s = 1e300 into non-finite vertices.
+#[test]
+fn material_values_past_their_bounds_are_refused_by_simulate_and_predict() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.mcap");
+    let out = out.to_str().unwrap();
+    for material in ["k_s=1e300", "rho=1e9", "k_b=1e-300"] {
+        for command in [
+            vec!["simulate", "--material", material, "--out", out],
+            vec![
+                "predict",
+                "--model",
+                "builtin-single",
+                "--material",
+                material,
+                "--out",
+                out,
+            ],
+        ] {
+            let err = fails(&command);
+            assert!(
+                err.contains("material.") && err.contains("must be a number of"),
+                "{command:?}: {err}"
+            );
+        }
+    }
+    assert!(!Path::new(out).exists());
+}

@@ -35,19 +35,27 @@ impl Default for Material {
     }
 }
 
+/// The material values accepted, (key, smallest, largest, unit): wide around cloth (silk to
+/// canvas: k_s 10-10^4 N/m, rho 0.02-1 kg/m^2, k_b 10^-8-10^-3 N m) but bounded, so no
+/// command (`simulate`, `predict`, a dataset spec) takes a value that overflows the solver or
+/// the surrogate's normalized conditions (k_s = 1e300 gave non-finite predictions).
+pub const MATERIAL_BOUNDS: [(&str, f64, f64, &str); 3] = [
+    ("material.k_s_n_per_m", 1e-3, 1e6, "N/m"),
+    ("material.rho_kg_per_m2", 1e-4, 100.0, "kg/m^2"),
+    ("material.k_b_n_m", 1e-14, 10.0, "N m"),
+];
+
 impl Material {
-    /// Checks that every value is finite and positive; the error names the configuration key.
+    /// Checks that every value is finite and within [`MATERIAL_BOUNDS`]; the error names the
+    /// configuration key. The one check of material values, for every command.
     pub fn validate(&self) -> Result<()> {
-        for (key, value, unit) in [
-            ("material.k_s_n_per_m", self.stretch, "N/m"),
-            ("material.rho_kg_per_m2", self.density, "kg/m^2"),
-            ("material.k_b_n_m", self.bending, "N m"),
-        ] {
-            if !value.is_finite() || value <= 0.0 {
+        let values = [self.stretch, self.density, self.bending];
+        for ((key, low, high, unit), value) in MATERIAL_BOUNDS.into_iter().zip(values) {
+            if !(value.is_finite() && (low..=high).contains(&value)) {
                 return Err(Error::value(
                     key,
                     value,
-                    &format!("must be a finite positive number of {unit}"),
+                    &format!("must be a number of {unit} from {low:e} to {high:e}"),
                 ));
             }
         }
@@ -300,6 +308,12 @@ mod tests {
             ..Material::default()
         };
         assert!(nan.validate().is_err());
+        let huge = Material {
+            stretch: 1e300,
+            ..Material::default()
+        };
+        let message = huge.validate().unwrap_err().to_string();
+        assert!(message.contains("from 1e-3 to 1e6"), "{message}");
         let params = SolverParams {
             substeps: 0,
             ..SolverParams::default()
