@@ -535,3 +535,82 @@ fn material_values_past_their_bounds_are_refused_by_simulate_and_predict() {
     }
     assert!(!Path::new(out).exists());
 }
+
+/// The shipped single network's run folder copied to `dir` with its first tensor spoiled by
+/// `spoil` (`f64`: stored as F64; `nan`, `huge`: one value NaN or 1e30); returns the tensor's name.
+fn spoiled_run(dir: &Path, spoil: &str) -> String {
+    use safetensors::tensor::TensorView;
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("surrogate/weights");
+    std::fs::create_dir_all(dir).unwrap();
+    for file in ["config.toml", "tensors.json"] {
+        std::fs::copy(shipped.join(file), dir.join(file)).unwrap();
+    }
+    let bytes = std::fs::read(shipped.join("model.safetensors")).unwrap();
+    let tensors = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+    let mut names = tensors.names();
+    names.sort();
+    let first = names[0].to_string();
+    let mut owned: Vec<(String, safetensors::Dtype, Vec<usize>, Vec<u8>)> = Vec::new();
+    for name in names {
+        let view = tensors.tensor(name).unwrap();
+        let mut values: Vec<f32> = view
+            .data()
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        let (dtype, data) = match (name == first, spoil) {
+            (true, "f64") => (
+                safetensors::Dtype::F64,
+                values
+                    .iter()
+                    .flat_map(|v| (*v as f64).to_le_bytes())
+                    .collect(),
+            ),
+            (true, _) => {
+                values[0] = if spoil == "nan" { f32::NAN } else { 1e30 };
+                (
+                    safetensors::Dtype::F32,
+                    values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                )
+            }
+            _ => (safetensors::Dtype::F32, view.data().to_vec()),
+        };
+        owned.push((name.to_string(), dtype, view.shape().to_vec(), data));
+    }
+    let views: Vec<(String, TensorView)> = owned
+        .iter()
+        .map(|(n, d, s, b)| (n.clone(), TensorView::new(*d, s.clone(), b).unwrap()))
+        .collect();
+    let out = safetensors::serialize(views, None).unwrap();
+    std::fs::write(dir.join("model.safetensors"), out).unwrap();
+    first
+}
+
+/// Weights of another dtype, or holding a NaN or an absurd value, are refused at load naming
+/// the tensor, before any prediction (burn used to panic on F64, and NaN weights predicted
+/// non-finite cloth).
+#[test]
+fn spoiled_weights_are_refused_at_load_naming_the_tensor() {
+    let dir = tempfile::tempdir().unwrap();
+    for (spoil, expected) in [
+        ("f64", "is F64"),
+        ("nan", "holds NaN"),
+        ("huge", "holds 1000000000000000000000000000000"),
+    ] {
+        let run = dir.path().join(spoil);
+        let tensor = spoiled_run(&run, spoil);
+        let out = dir.path().join(format!("{spoil}.mcap"));
+        let err = fails(&[
+            "predict",
+            "--model",
+            run.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            err.contains(&format!("tensor '{tensor}'")) && err.contains(expected),
+            "{spoil}: {err}"
+        );
+        assert!(!out.exists());
+    }
+}

@@ -44,7 +44,7 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     if !weights.exists() {
         return Err(file_error(&weights, "missing (train the model first)"));
     }
-    check_weights_file(&weights)?;
+    check_model_weights(&weights)?;
     let mut model = Dit::new(&config.model, device);
     let mut store = SafetensorsStore::from_file(&weights).with_from_adapter(PyTorchToBurnAdapter);
     let result = model.load_from(&mut store).map_err(|e| {
@@ -152,9 +152,49 @@ impl TrainedModel {
     }
 }
 
+/// The largest weight magnitude a trained network holds here (the shipped ones stay under 1);
+/// beyond it a file is damaged or not a trained network, and sampling would overflow.
+pub const MAX_WEIGHT: f32 = 1e4;
+
 /// Refuses a weights file that is not a regular file (a FIFO would block the reader, a
 /// device never end) or is larger than any model, before burn reads it.
 pub(crate) fn check_weights_file(path: &Path) -> Result<()> {
     files::open_bounded(path, files::limits::TENSORS, "weights file")?;
+    Ok(())
+}
+
+/// Refuses, before burn reads it, a `model.safetensors` that [`check_weights_file`] refuses,
+/// that is not safetensors, or that holds a tensor that is not F32 (burn loads F16 or F64 and
+/// then panics in the first matrix product) or a value that is not finite or beyond
+/// [`MAX_WEIGHT`]; the error names the tensor.
+fn check_model_weights(path: &Path) -> Result<()> {
+    let bytes = files::read(path, files::limits::TENSORS, "weights file")?;
+    let tensors = safetensors::SafeTensors::deserialize(&bytes)
+        .map_err(|e| file_error(path, format!("not a safetensors file: {e}")))?;
+    for (name, view) in tensors.tensors() {
+        if view.dtype() != safetensors::Dtype::F32 {
+            return Err(file_error(
+                path,
+                format!(
+                    "tensor '{name}' is {:?}; the model's weights are F32",
+                    view.dtype()
+                ),
+            ));
+        }
+        let bad = view
+            .data()
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .find(|v| !(v.is_finite() && v.abs() <= MAX_WEIGHT));
+        if let Some(v) = bad {
+            return Err(file_error(
+                path,
+                format!(
+                    "tensor '{name}' holds {v}: a trained network's weights are finite and \
+                     within {MAX_WEIGHT:e}"
+                ),
+            ));
+        }
+    }
     Ok(())
 }
