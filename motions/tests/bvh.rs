@@ -380,6 +380,13 @@ fn damaged_files_are_refused_naming_the_line() {
         (bvh.frames(), bvh.joints.len(), bvh.values_per_frame),
         (2, 2, 9)
     );
+    // A frame past the announced count (an exporter's off-by-one) is read and kept out.
+    let one = Bvh::parse(
+        &good.replace("Frames: 2", "Frames: 1"),
+        Path::new("one.bvh"),
+    )
+    .unwrap();
+    assert_eq!(one.frames(), 1);
     for (what, text, line, expected) in [
         (
             "no header",
@@ -464,10 +471,10 @@ fn damaged_files_are_refused_naming_the_line() {
             "'nan' is not a finite number",
         ),
         (
-            "more frames",
-            good.replace("Frames: 2", "Frames: 1"),
-            20,
-            "more frames than the 1",
+            "a bad line past the frames",
+            good.replace("Frames: 2", "Frames: 1") + "0 1 0\n",
+            21,
+            "frame 3 has 3 values",
         ),
         (
             "fewer frames",
@@ -665,5 +672,42 @@ fn cmu_bones_point_where_the_capture_points() {
             }
         }
         eprintln!("{name}: worst bone direction difference per joint {worst:.2?} deg");
+    }
+}
+
+/// The package's BioVision-style clip (`LeftShoulder` is the upper arm there; one frame more
+/// than its header announces) retargets through the `biovision` map to an upright body.
+#[test]
+fn boxing_toes_retargets_through_the_biovision_map() {
+    let Some(path) = cmu_clip(
+        "boxing_toes_retargets_through_the_biovision_map",
+        "Boxing_Toes.bvh",
+    ) else {
+        return;
+    };
+    let model = BodyModel::default_body();
+    let shaped = model.shape(&[]).unwrap();
+    let loaded = MotionSource::parse(path.to_str().unwrap())
+        .unwrap()
+        .load(&model, &shaped)
+        .unwrap();
+    let report = loaded.retarget.unwrap();
+    assert_eq!(
+        (
+            report.map.as_str(),
+            report.mapped.len(),
+            report.source_frames
+        ),
+        ("biovision", 21, 3069)
+    );
+    assert!(
+        report
+            .mapped
+            .contains(&("left_shoulder", "LeftShoulder".to_string()))
+    );
+    for frame in loaded.motion.frames.iter().step_by(50) {
+        let body = model.pose(&shaped, frame).unwrap();
+        let y = |j: usize| body.joints[j][1];
+        assert!(y(15) > y(0) && y(0) > y(7).min(y(8)));
     }
 }

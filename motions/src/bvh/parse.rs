@@ -433,12 +433,8 @@ impl<'a> Parser<'a> {
         let mut values = Vec::with_capacity((count * values_per_frame).min(1 << 24));
         let mut frames = 0;
         for (i, line) in rows {
-            if frames == count {
-                return Err(self.error(
-                    i + 1,
-                    format!("more frames than the {count} that 'Frames:' announces"),
-                ));
-            }
+            // Lines past the announced count are read but kept out (some exporters announce
+            // one frame fewer than they write, as Blender's reader does), yet must be frames.
             let before = values.len();
             for text in line.split_whitespace() {
                 match text.parse::<f64>() {
@@ -459,6 +455,9 @@ impl<'a> Parser<'a> {
                 ));
             }
             frames += 1;
+            if frames > count {
+                values.truncate(before);
+            }
         }
         if frames < count {
             return Err(self.error(
