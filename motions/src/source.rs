@@ -132,7 +132,7 @@ impl MotionSource {
                 (r.motion, Some(r.report))
             }
         };
-        let mut motion = file.stretch(&raw.resample(OUTPUT_FPS)?)?;
+        let mut motion = file.stretch(raw.resample(OUTPUT_FPS)?)?;
         motion.name = file.label();
         if retarget.is_some() {
             place_on_floor(&mut motion, model, shaped)?;
@@ -208,9 +208,9 @@ impl FileMotion {
     }
 
     /// The stretch of a 30 fps motion this file motion asks for.
-    fn stretch(&self, motion: &Motion) -> Result<Motion> {
+    fn stretch(&self, mut motion: Motion) -> Result<Motion> {
         if self.start == 0.0 && self.duration.is_none() {
-            return Ok(motion.clone());
+            return Ok(motion);
         }
         let first = (self.start * OUTPUT_FPS).round() as usize;
         let available = motion.len().saturating_sub(first);
@@ -229,14 +229,9 @@ impl FileMotion {
                 ),
             });
         }
-        let mut out = Motion::new(
-            motion.name.clone(),
-            motion.fps,
-            motion.frames[first..first + count].to_vec(),
-        )?;
-        out.betas = motion.betas.clone();
-        out.gender = motion.gender.clone();
-        Ok(out)
+        motion.frames.truncate(first + count);
+        motion.frames.drain(..first);
+        Ok(motion)
     }
 }
 
