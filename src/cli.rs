@@ -417,8 +417,11 @@ pub enum DatasetCommand {
     /// surrogate's training tensors: safetensors shards per split, the templates' position
     /// maps and masks, and `manifest.json` (layout, train-split normalization, checksums).
     Tensors {
-        /// Dataset folder (`synth` output with its manifest).
-        dir: PathBuf,
+        /// Dataset folders (`synth` output with its manifest): one, or several whose specs give
+        /// the same material ranges (say a procedural dataset and a motion-capture one),
+        /// combined into one tensor set split by split.
+        #[arg(required = true, num_args = 1..)]
+        dirs: Vec<PathBuf>,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,

@@ -1,7 +1,7 @@
 //! `dit-garment dataset verify | stats | merge | tensors` (`spread` in `spread.rs`): checking, summarizing and merging dataset
 //! folders written by `synth` (layout in `synth.rs` and docs/DATASETS.md).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use sim::dataset::{DatasetDir, ManifestRecord, load, stats};
@@ -33,7 +33,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             quiet,
         ),
         DatasetCommand::Tensors {
-            dir,
+            dirs,
             out,
             resolution,
             target,
@@ -70,27 +70,31 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 nearest: body_nearest,
                 ..TensorOptions::default()
             };
-            tensors(&dir, &out, model.body_model.as_deref(), &options, quiet)
+            tensors(&dirs, &out, model.body_model.as_deref(), &options, quiet)
         }
     }
 }
 
-/// `dataset tensors`: the surrogate's training tensors of a dataset.
+/// `dataset tensors`: the surrogate's training tensors of one dataset or several combined.
 fn tensors(
-    dir: &Path,
+    dirs: &[PathBuf],
     out: &Path,
     model: Option<&Path>,
     options: &TensorOptions,
     quiet: bool,
 ) -> Result<()> {
     let model = sim::sources::body_model(model)?;
-    let records: Vec<ManifestRecord> =
-        files::read_json_lines(&DatasetDir::new(dir).manifest(), "dataset manifest")?;
-    let total = records.iter().filter(|r| r.ok()).count();
+    let mut total = 0;
+    for dir in dirs {
+        let records: Vec<ManifestRecord> =
+            files::read_json_lines(&DatasetDir::new(dir).manifest(), "dataset manifest")?;
+        total += records.iter().filter(|r| r.ok()).count();
+    }
     let bar = progress("tensors", total, "sequences", "(eta {eta})", quiet);
     let started = std::time::Instant::now();
-    let manifest = write_tensors(dir, out, &model, options, || bar.inc(1))
-        .with_context(|| format!("making tensors of {}", dir.display()))?;
+    let names: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+    let manifest = write_tensors(dirs, out, &model, options, || bar.inc(1))
+        .with_context(|| format!("making tensors of {}", names.join(", ")))?;
     bar.finish_and_clear();
     let frames: usize = manifest.splits.values().map(|s| s.frames).sum();
     say!(

@@ -60,11 +60,7 @@ fn show(name: &str, pattern_out: Option<&Path>) -> Result<()> {
     if design.index == 0 {
         say!("{}: {} ({} split)", base.name, base.description, base.split);
     } else {
-        let kind = if design.wide {
-            "wide variant"
-        } else {
-            "variant"
-        };
+        let kind = design.kind.describe();
         say!(
             "{}: {kind} {} of {} ({})",
             design.name,

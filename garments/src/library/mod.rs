@@ -15,7 +15,7 @@ mod summary;
 mod variants;
 pub use family::Family;
 pub use summary::DesignSummary;
-pub use variants::{MAX_INDEX, NamedDesign, naming, resolve, variant_name};
+pub use variants::{MAX_INDEX, NamedDesign, VariantKind, naming, resolve, variant_name};
 
 use crate::error::Result;
 use crate::pattern::{Curve, Pattern, SpecFile};

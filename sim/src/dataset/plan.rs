@@ -355,6 +355,7 @@ mod tests {
             split,
             variants: 0,
             wide_variants: 0,
+            dress_variants: 0,
         };
         let m = |source: &str, split| MotionEntry {
             source: source.into(),
@@ -395,6 +396,7 @@ mod tests {
             split: Tag::Test,
             variants: 0,
             wide_variants: 0,
+            dress_variants: 0,
         });
         spec.motions.push(MotionEntry {
             source: "sway".into(),

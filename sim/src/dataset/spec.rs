@@ -219,6 +219,10 @@ pub struct GarmentEntry {
     /// over the library's range, keeping only whether the design has sleeves); 0, none.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub wide_variants: u32,
+    /// Dress variants joined after those (`name~d1` ..= `name~dN`: dresses drawn from above
+    /// the knee to the floor and from straight to flared, with the design's sleeves); 0, none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub dress_variants: u32,
 }
 
 fn is_zero(n: &u32) -> bool {
@@ -226,12 +230,15 @@ fn is_zero(n: &u32) -> bool {
 }
 
 impl GarmentEntry {
-    /// The garment's names: the entry's, then its variants', then its wide variants'.
+    /// The garment's names: the entry's, then its variants', wide variants' and dress
+    /// variants'.
     pub fn names(&self) -> impl Iterator<Item = String> + '_ {
-        let variant = |wide| move |k| garments::library::variant_name(&self.name, k, wide);
+        use garments::library::VariantKind;
+        let variant = |kind| move |k| garments::library::variant_name(&self.name, k, kind);
         std::iter::once(self.name.clone())
-            .chain((1..=self.variants).map(variant(false)))
-            .chain((1..=self.wide_variants).map(variant(true)))
+            .chain((1..=self.variants).map(variant(VariantKind::Near)))
+            .chain((1..=self.wide_variants).map(variant(VariantKind::Wide)))
+            .chain((1..=self.dress_variants).map(variant(VariantKind::Dress)))
     }
 }
 
@@ -431,7 +438,11 @@ impl DatasetSpec {
             }
         }
         for g in &self.garments {
-            for (key, n) in [("variants", g.variants), ("wide_variants", g.wide_variants)] {
+            for (key, n) in [
+                ("variants", g.variants),
+                ("wide_variants", g.wide_variants),
+                ("dress_variants", g.dress_variants),
+            ] {
                 if n == 0 {
                     continue;
                 }

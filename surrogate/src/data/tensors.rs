@@ -340,23 +340,63 @@ fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
         .collect()
 }
 
-/// Turns the dataset in `dir` into tensors in `out`; `progress` is called once per sequence.
+/// The finished sequences of several datasets, and the material ranges their conditions are
+/// scaled by: every dataset's spec must give the same ranges (a condition means one material
+/// in all of them), and no sequence may come twice (the same dataset given twice).
+fn combined(
+    dirs: &[PathBuf],
+) -> Result<(MaterialRanges, Vec<(ManifestRecord, PathBuf, Sequence)>)> {
+    let Some(first) = dirs.first() else {
+        return Err(crate::error::Error::Invalid(
+            "no dataset folder given".into(),
+        ));
+    };
+    let material = DatasetSpec::load(&first.join("spec.toml"))?.material;
+    let mut all: Vec<(ManifestRecord, PathBuf, Sequence)> = Vec::new();
+    for dir in dirs {
+        let path = dir.join("spec.toml");
+        let spec = DatasetSpec::load(&path)?;
+        if spec.material != material {
+            return Err(file_error(
+                &path,
+                format!(
+                    "material ranges {:?} differ from {:?} of {} (datasets combined into one \
+                     tensor set must share them)",
+                    spec.material,
+                    material,
+                    first.display()
+                ),
+            ));
+        }
+        for found in finished(dir)? {
+            if let Some(seen) = all.iter().find(|(r, ..)| r.id == found.0.id) {
+                return Err(file_error(
+                    &dir.join("manifest.jsonl"),
+                    format!("sequence {} is also in {}", found.0.id, seen.1.display()),
+                ));
+            }
+            all.push(found);
+        }
+    }
+    Ok((material, all))
+}
+
+/// Turns the datasets in `dirs` (one, or several with the same material ranges) into tensors
+/// in `out`; `progress` is called once per sequence.
 pub fn write_tensors(
-    dir: &Path,
+    dirs: &[PathBuf],
     out: &Path,
     model: &BodyModel,
     options: &TensorOptions,
     progress: impl Fn() + Sync,
 ) -> Result<TensorManifest> {
-    let spec = DatasetSpec::load(&dir.join("spec.toml"))?;
-    let (records, sequences): (Vec<ManifestRecord>, Vec<(PathBuf, Sequence)>) = finished(dir)?
-        .into_iter()
-        .map(|(r, path, s)| (r, (path, s)))
-        .unzip();
+    let (material, found) = combined(dirs)?;
+    let (records, sequences): (Vec<ManifestRecord>, Vec<(PathBuf, Sequence)>) =
+        found.into_iter().map(|(r, path, s)| (r, (path, s))).unzip();
     let layout = ConditionLayout {
         betas: model.num_betas(),
         window: options.window,
-        material: spec.material,
+        material,
         scaling: options.conditions,
     };
     let with_bodies = options.target == TargetKind::LbsResidual;
@@ -609,7 +649,11 @@ pub fn write_tensors(
     let templates_sha256 = write_atomic(&path, &bytes)?;
     let manifest = TensorManifest {
         format: 2,
-        source: dir.display().to_string(),
+        source: dirs
+            .iter()
+            .map(|d| d.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
         resolution: r,
         target: options.target,
         window: options.window,
@@ -618,7 +662,7 @@ pub fn write_tensors(
         condition_layout: Some(layout),
         condition: layout.blocks(),
         condition_dim: dim,
-        material_ranges: spec.material,
+        material_ranges: material,
         body_model: model.name().to_string(),
         splits: manifest_splits,
         templates: templates

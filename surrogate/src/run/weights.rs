@@ -12,14 +12,75 @@ use crate::data::TensorManifest;
 use crate::error::{Result, file_error};
 use crate::model::Dit;
 
-/// Writes `model` to `path` (safetensors, PyTorch names), through a temporary name.
-pub fn save_weights(model: &Dit, path: &Path) -> Result<()> {
+/// The commit this build was made from (`unknown` outside a git checkout).
+pub const COMMIT: &str = env!("DIT_GARMENT_COMMIT");
+
+/// Where a `model.safetensors` came from, kept in its header's metadata (the string map every
+/// safetensors reader shows), so weights found alone still name what made them.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Provenance {
+    /// SHA-256 of the run's `config.toml`.
+    pub config_sha256: String,
+    /// SHA-256 of the `manifest.json` of the training tensors (which holds every shard's
+    /// checksum and the datasets they were made from).
+    pub dataset_manifest_sha256: String,
+    /// The commit of the program that trained it.
+    pub commit: String,
+}
+
+impl Provenance {
+    /// The metadata keys, in the order written.
+    pub const KEYS: [&'static str; 3] = ["config_sha256", "dataset_manifest_sha256", "commit"];
+
+    fn values(&self) -> [&str; 3] {
+        [
+            &self.config_sha256,
+            &self.dataset_manifest_sha256,
+            &self.commit,
+        ]
+    }
+
+    /// The provenance in the header of `path`; `None` for weights saved without one (the
+    /// models shipped before 2026-12-05).
+    pub fn read(path: &Path) -> Result<Option<Provenance>> {
+        let bytes = files::read(path, files::limits::TENSORS, "weights file")?;
+        let (_, header) =
+            safetensors::SafeTensors::read_metadata(&bytes).map_err(|e| file_error(path, e))?;
+        let Some(map) = header.metadata() else {
+            return Ok(None);
+        };
+        let get = |key: &str| map.get(key).cloned();
+        Ok(
+            match (
+                get("config_sha256"),
+                get("dataset_manifest_sha256"),
+                get("commit"),
+            ) {
+                (Some(config_sha256), Some(dataset_manifest_sha256), Some(commit)) => {
+                    Some(Provenance {
+                        config_sha256,
+                        dataset_manifest_sha256,
+                        commit,
+                    })
+                }
+                _ => None,
+            },
+        )
+    }
+}
+
+/// Writes `model` to `path` (safetensors, PyTorch names) with its provenance in the header's
+/// metadata, through a temporary name.
+pub fn save_weights(model: &Dit, path: &Path, provenance: &Provenance) -> Result<()> {
     let (temporary, file) = files::Temporary::create(path)?;
     drop(file);
     let tmp = temporary.path().to_path_buf();
     let mut store = SafetensorsStore::from_file(&tmp)
         .overwrite(true)
         .with_to_adapter(BurnToPyTorchAdapter);
+    for (key, value) in Provenance::KEYS.into_iter().zip(provenance.values()) {
+        store = store.metadata(key, value);
+    }
     model
         .save_into(&mut store)
         .map_err(|e| file_error(&tmp, e))?;

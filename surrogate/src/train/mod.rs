@@ -30,7 +30,7 @@ use crate::data::TrainingTensors;
 use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
 use crate::noise::generator;
-use crate::run::{RunConfig, TENSORS_MANIFEST, TrainConfig, save_weights};
+use crate::run::{COMMIT, Provenance, RunConfig, TENSORS_MANIFEST, TrainConfig, save_weights};
 
 /// One line of `log.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -348,7 +348,12 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     if saved_at != state.step {
         checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
     }
-    save_weights(&ema, &run.join("model.safetensors"))?;
+    let provenance = Provenance {
+        config_sha256: files::sha256_file(&config_path)?.0,
+        dataset_manifest_sha256: files::sha256_file(&options.data.join("manifest.json"))?.0,
+        commit: COMMIT.to_string(),
+    };
+    save_weights(&ema, &run.join("model.safetensors"), &provenance)?;
     let reference = reference_batch(&tensors, &train_frames, &val_frames, t, recipe);
     save_reference(&ema, &reference, &run.join("reference.safetensors"), plain)?;
     let summary = Summary {
