@@ -5,7 +5,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{fails, json, ok};
+use common::{fails, json, ok, run_with};
 use serde_json::Value;
 
 /// Counts MCAP messages per topic.
@@ -678,4 +678,59 @@ fn garments_list_make_and_check() {
     assert!(!never.exists());
     let e = fails(&["garments", "show", "poncho"]);
     assert!(e.contains("unknown design"), "{e}");
+}
+
+/// A sewing pattern file is a garment wherever a design name is: the library's own pattern,
+/// written out by `garments show --pattern-out` and named as a file, is sewn to the same
+/// template; a pattern file that does not parse is refused naming it.
+#[test]
+fn a_pattern_file_is_a_garment() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let pattern = dir.path().join("tank_tight_copy.json");
+    ok(&[
+        "garments",
+        "show",
+        "tank_tight",
+        "--pattern-out",
+        pattern.to_str().unwrap(),
+    ]);
+    let simulate = |garment: &str, json: &Path| {
+        run_with(
+            &[
+                "simulate",
+                "--garment",
+                garment,
+                "--frames",
+                "2",
+                "--json",
+                json.to_str().unwrap(),
+            ],
+            &[("DIT_GARMENT_CACHE", cache.to_str().unwrap())],
+        )
+    };
+    let (from_file, from_name) = (dir.path().join("file.json"), dir.path().join("name.json"));
+    for (garment, json) in [
+        (pattern.to_str().unwrap(), &from_file),
+        ("tank_tight", &from_name),
+    ] {
+        let out = simulate(garment, json);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let vertices = |path: &Path| json(path)["vertices"].clone();
+    assert_eq!(vertices(&from_file), vertices(&from_name));
+    assert!(vertices(&from_file).as_u64().unwrap() > 1000);
+    let broken = dir.path().join("broken.json");
+    std::fs::write(&broken, "{\"pattern\": ").unwrap();
+    let out = simulate(
+        broken.to_str().unwrap(),
+        &dir.path().join("broken_run.json"),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("broken.json"), "{stderr}");
 }

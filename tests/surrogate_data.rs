@@ -286,3 +286,69 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     );
     assert!(!c.exists(), "a failed run wrote {}", c.display());
 }
+
+/// Several datasets make one tensor set: frames of both, split by split; the same dataset
+/// twice, or one whose material ranges differ, is refused by name with nothing written.
+#[test]
+fn dataset_tensors_combine_datasets_that_share_material_ranges() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = synth(dir.path());
+    let synth_as = |name: &str, spec: String| {
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&path, spec).unwrap();
+        let data = dir.path().join(name);
+        ok(&[
+            "synth",
+            "--spec",
+            path.to_str().unwrap(),
+            "--out",
+            data.to_str().unwrap(),
+            "--quiet",
+        ]);
+        data
+    };
+    let second = synth_as("second", SPEC.replace("seed = 3", "seed = 4"));
+    let other = synth_as(
+        "other",
+        SPEC.replace("seed = 3", "seed = 5")
+            .replace("[solver]", "[material]\nk_s = [50.0, 60.0]\n[solver]"),
+    );
+    let tensors = |dirs: &[&Path], out: &Path| {
+        let mut args = vec!["dataset", "tensors"];
+        args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+        args.extend(["--out", out.to_str().unwrap(), "--quiet"]);
+        run_with(&args, &[])
+    };
+    let both = dir.path().join("both");
+    let out = tensors(&[&first, &second], &both);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: Value = json(&both.join("manifest.json"));
+    assert_eq!(m["splits"]["train"]["frames"], 16);
+    assert_eq!(m["splits"]["train"]["sequences"], 2);
+    assert_eq!(m["splits"]["test_motion"]["sequences"], 2);
+    let source = m["source"].as_str().unwrap();
+    assert!(
+        source.contains("data") && source.contains("second"),
+        "{source}"
+    );
+    for (dirs, names) in [
+        (vec![&first, &first], "also in"),
+        (vec![&first, &other], "material ranges"),
+    ] {
+        let out_dir = dir.path().join("refused");
+        let dirs: Vec<&Path> = dirs.iter().map(|d| d.as_path()).collect();
+        let out = tensors(&dirs, &out_dir);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(names), "{stderr}");
+        assert!(
+            !out_dir.exists(),
+            "a refused run wrote {}",
+            out_dir.display()
+        );
+    }
+}

@@ -179,6 +179,25 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     let png = image::open(run.join("loss.png")).unwrap();
     assert_eq!((png.width(), png.height()), (720, 420));
 
+    // The weights name what made them: the run's config, the tensors' manifest, the commit.
+    let provenance = surrogate::run::Provenance::read(&run.join("model.safetensors"))
+        .unwrap()
+        .expect("model.safetensors carries its provenance");
+    let sha = |path: &Path| files::sha256_file(path).unwrap().0;
+    assert_eq!(provenance.config_sha256, sha(&run.join("config.toml")));
+    assert_eq!(
+        provenance.dataset_manifest_sha256,
+        sha(&tensors().join("manifest.json"))
+    );
+    assert_eq!(provenance.commit, surrogate::run::COMMIT);
+    assert!(
+        provenance.commit == "unknown"
+            || (provenance.commit.len() == 40
+                && provenance.commit.bytes().all(|b| b.is_ascii_hexdigit())),
+        "{}",
+        provenance.commit
+    );
+
     // The weights load back into the model they came from, and reproduce the reference output.
     let device = surrogate::burn::prelude::Device::flex();
     let (loaded, model) = surrogate::run::load_run(&run, &device).unwrap();

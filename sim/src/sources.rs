@@ -109,6 +109,16 @@ pub fn garment(
         return Ok((template, Vec::new()));
     }
     let path = Path::new(source);
+    if source.ends_with(".json") {
+        // A sewing pattern (GarmentCode specification), sewn and cached as a library design.
+        let pattern =
+            garments::Pattern::read(path).map_err(|e| fail(format!("pattern file: {e}")))?;
+        let name = path
+            .file_stem()
+            .map_or_else(|| source.to_string(), |s| s.to_string_lossy().into_owned());
+        let template = crate::templates::pattern_template(&name, &pattern, model, cache, making)?;
+        return Ok((template, Vec::new()));
+    }
     if source.ends_with(".obj") || path.exists() {
         let (raw, numbers) =
             garments::read_obj_numbered(path).map_err(|e| fail(format!("garment file: {e}")))?;

@@ -28,16 +28,13 @@ pub fn cache_dir() -> PathBuf {
 /// The cached template's path in `cache`: the design's name and a hash of its pattern, the
 /// body, the sewing options, the software version and the engine revision.
 pub fn template_path(design: &NamedDesign, model: &BodyModel, cache: &Path) -> Result<PathBuf> {
-    let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
-    Ok(keyed_path(design, &pattern, model, cache))
+    let pattern = design
+        .pattern()
+        .map_err(|e| garment_error(&design.name, e))?;
+    Ok(keyed_path(&design.name, &pattern, model, cache))
 }
 
-fn keyed_path(
-    design: &NamedDesign,
-    pattern: &garments::Pattern,
-    model: &BodyModel,
-    cache: &Path,
-) -> PathBuf {
+fn keyed_path(name: &str, pattern: &garments::Pattern, model: &BodyModel, cache: &Path) -> PathBuf {
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     pattern.to_json().hash(&mut hasher);
     env!("CARGO_PKG_VERSION").hash(&mut hasher);
@@ -47,7 +44,7 @@ fn keyed_path(
     for v in model.template() {
         v.map(f64::to_bits).hash(&mut hasher);
     }
-    cache.join(format!("{}-{:016x}.obj", design.name, hasher.finish()))
+    cache.join(format!("{name}-{:016x}.obj", hasher.finish()))
 }
 
 /// A library design's (or a variant's) template on `model`, made on first use (`making` hears
@@ -59,26 +56,41 @@ pub fn library_template(
     cache: &Path,
     making: impl FnOnce(&Path),
 ) -> Result<Garment> {
-    let pattern = design.pattern().map_err(|e| garment_error(design, e))?;
-    let path = keyed_path(design, &pattern, model, cache);
+    let pattern = design
+        .pattern()
+        .map_err(|e| garment_error(&design.name, e))?;
+    pattern_template(&design.name, &pattern, model, cache, making)
+}
+
+/// A sewing pattern's template on `model` (a GarmentCode specification read by
+/// `garments::Pattern::read`, or a library design's), made and cached as a library design's
+/// is: the cache key holds the whole pattern, so an edited file is sewn again.
+pub fn pattern_template(
+    name: &str,
+    pattern: &garments::Pattern,
+    model: &BodyModel,
+    cache: &Path,
+    making: impl FnOnce(&Path),
+) -> Result<Garment> {
+    let path = keyed_path(name, pattern, model, cache);
     if !path.exists() {
         making(&path);
         let mesh = pattern
             .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)
-            .map_err(|e| garment_error(design, e))?;
+            .map_err(|e| garment_error(name, e))?;
         let (template, report) = sew(model, &mesh, &SewingOptions::default())?;
         if !report.gates_passed {
             return Err(Error::TemplateGates {
-                garment: design.name.clone(),
+                garment: name.to_string(),
                 failed: report.failed.join("; "),
             });
         }
         write_template(&path, &template)?;
     }
     // Always the cached file, so the first use and every later one simulate the same numbers.
-    let mut cached = garments::read_obj(&path).map_err(|e| garment_error(design, e))?;
-    cached.name = design.name.to_string();
-    cached.validate().map_err(|e| garment_error(design, e))?;
+    let mut cached = garments::read_obj(&path).map_err(|e| garment_error(name, e))?;
+    cached.name = name.to_string();
+    cached.validate().map_err(|e| garment_error(name, e))?;
     Ok(cached)
 }
 
@@ -139,9 +151,9 @@ pub fn write_template(path: &Path, template: &Garment) -> Result<()> {
     })?)
 }
 
-fn garment_error(design: &NamedDesign, problem: impl std::fmt::Display) -> Error {
+fn garment_error(name: &str, problem: impl std::fmt::Display) -> Error {
     Error::Garment {
-        garment: design.name.clone(),
+        garment: name.to_string(),
         problem: problem.to_string(),
     }
 }
