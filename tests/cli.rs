@@ -696,6 +696,7 @@ fn a_pattern_file_is_a_garment() {
         pattern.to_str().unwrap(),
     ]);
     let simulate = |garment: &str, json: &Path| {
+        let out = json.with_extension("mcap");
         run_with(
             &[
                 "simulate",
@@ -705,6 +706,8 @@ fn a_pattern_file_is_a_garment() {
                 "2",
                 "--json",
                 json.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
             ],
             &[("DIT_GARMENT_CACHE", cache.to_str().unwrap())],
         )
