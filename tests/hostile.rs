@@ -614,3 +614,118 @@ fn spoiled_weights_are_refused_at_load_naming_the_tensor() {
         assert!(!out.exists());
     }
 }
+
+/// The shipped single network's run folder, whole, in `dir`.
+fn shipped_copy(dir: &Path) -> PathBuf {
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("surrogate/weights");
+    std::fs::create_dir_all(dir).unwrap();
+    for file in ["config.toml", "tensors.json", "model.safetensors"] {
+        std::fs::copy(shipped.join(file), dir.join(file)).unwrap();
+    }
+    dir.to_path_buf()
+}
+
+/// A model folder whose statistics, size or ensemble list cannot be right is refused at load,
+/// naming the file and the value, before any prediction: `tensors.json` with a zero, negative
+/// or huge deviation, a huge mean, an empty material range or an unknown format; a
+/// `config.toml` of a network far larger than its weights (refused before it is built); an
+/// ensemble naming one run twice. `evaluate` with nothing to score says so.
+#[test]
+fn model_folders_that_cannot_be_right_are_refused_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.mcap");
+    let predict = |model: &Path| {
+        fails(&[
+            "predict",
+            "--model",
+            model.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let spoils: [(&str, &dyn Fn(&mut Value), &str); 6] = [
+        (
+            "zero_std",
+            &|t| t["normalization"]["targets"]["std"][1] = 0.0.into(),
+            "normalization.targets.std[1] is 0",
+        ),
+        (
+            "negative_std",
+            &|t| t["normalization"]["conditions"]["std"][0] = (-1.0).into(),
+            "normalization.conditions.std[0] is -1",
+        ),
+        (
+            "huge_std",
+            &|t| t["normalization"]["position_maps"]["std"][2] = 1e300.into(),
+            "normalization.position_maps.std[2]",
+        ),
+        (
+            "huge_mean",
+            &|t| t["normalization"]["targets"]["mean"][0] = 1e308.into(),
+            "normalization.targets.mean[0]",
+        ),
+        (
+            "empty_range",
+            &|t| t["material_ranges"]["k_s"] = serde_json::json!([100.0, 100.0]),
+            "material_ranges.k_s is [100, 100]",
+        ),
+        ("format", &|t| t["format"] = 99.into(), "format 99"),
+    ];
+    for (name, spoil, expected) in spoils {
+        let run = shipped_copy(&dir.path().join(name));
+        let path = run.join("tensors.json");
+        let mut tensors: Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        spoil(&mut tensors);
+        std::fs::write(&path, tensors.to_string()).unwrap();
+        let err = predict(&run);
+        assert!(
+            err.contains("tensors.json") && err.contains(expected),
+            "{name}: {err}"
+        );
+        assert!(!out.exists(), "{name}");
+    }
+
+    // A network four times wider than its weights: refused by counting, not by building it.
+    let wide = shipped_copy(&dir.path().join("wide"));
+    let config = std::fs::read_to_string(wide.join("config.toml")).unwrap();
+    let config = config.replace("width = 128", "width = 512");
+    assert!(config.contains("width = 512"));
+    std::fs::write(wide.join("config.toml"), config).unwrap();
+    let err = predict(&wide);
+    assert!(
+        err.contains("model.safetensors") && err.contains("does not fit") && err.contains("holds"),
+        "{err}"
+    );
+
+    // One run twice in an ensemble, spelled two ways.
+    let run = shipped_copy(&dir.path().join("member"));
+    let ensemble = dir.path().join("twice");
+    std::fs::create_dir_all(&ensemble).unwrap();
+    std::fs::write(
+        ensemble.join("ensemble.toml"),
+        format!(
+            "members = [\"../member\", \"{}\"]\n",
+            run.join(".").display()
+        ),
+    )
+    .unwrap();
+    let err = predict(&ensemble);
+    assert!(
+        err.contains("members 1 and 2 are the same run folder"),
+        "{err}"
+    );
+
+    let err = fails(&[
+        "evaluate",
+        "--model",
+        "none",
+        "--baselines",
+        "",
+        "--data",
+        dir.path().join("data").to_str().unwrap(),
+        "--json",
+        dir.path().join("scores.json").to_str().unwrap(),
+    ]);
+    assert!(err.contains("nothing to score"), "{err}");
+}

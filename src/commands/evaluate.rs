@@ -60,6 +60,9 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         .filter(|b| !b.is_empty())
         .map(|b| Baseline::parse(b, floor))
         .collect::<surrogate::Result<Vec<_>>>()?;
+    if trained.is_none() && baselines.is_empty() {
+        bail!("--model none with no --baselines: nothing to score (name a model or a baseline)");
+    }
 
     let dir = DatasetDir::new(&args.data);
     let manifest = dir.manifest();

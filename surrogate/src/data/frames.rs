@@ -124,6 +124,9 @@ impl TrainingTensors {
                 "normalization statistics of the wrong length",
             ));
         }
+        if let Some(problem) = manifest.statistics_problem() {
+            return Err(file_error(&path, problem));
+        }
         let r = manifest.resolution;
         let g = manifest.templates.len();
         let path = dir.join("templates.safetensors");

@@ -124,6 +124,15 @@ pub struct Normalization {
     pub bodies: Option<Stats>,
 }
 
+/// The format `dataset tensors` writes (`manifest.json`'s `format`).
+pub const TENSORS_FORMAT: u32 = 2;
+/// The smallest standard deviation statistics hold (constant channels get 1; see
+/// `stats::stats`).
+const MIN_STD: f64 = 1e-12;
+/// The largest mean or deviation any of this project's data has, by far (metres, normalized
+/// conditions and material values are all under 1e3).
+const MAX_STATISTIC: f64 = 1e6;
+
 /// `manifest.json` of a tensors folder.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TensorManifest {
@@ -178,6 +187,58 @@ impl TensorManifest {
                 [BODY_CHANNELS, BODY_CHANNELS + NEAREST_CHANNELS].contains(&s.mean.len())
                     && s.std.len() == s.mean.len()
             })
+    }
+
+    /// What is wrong with the manifest's numbers, if anything: an unknown format, a mean or
+    /// standard deviation that is not finite, a deviation not positive or beyond any data's,
+    /// a material range that is empty. Sampling divides and multiplies by these, so such a
+    /// manifest would give non-finite or silently wrong cloth; it is refused at load.
+    pub fn statistics_problem(&self) -> Option<String> {
+        if !(1..=TENSORS_FORMAT).contains(&self.format) {
+            return Some(format!(
+                "format {} (this build reads 1 to {TENSORS_FORMAT})",
+                self.format
+            ));
+        }
+        let n = &self.normalization;
+        let named = [
+            ("targets", Some(&n.targets)),
+            ("conditions", Some(&n.conditions)),
+            ("position_maps", Some(&n.position_maps)),
+            ("bodies", n.bodies.as_ref()),
+        ];
+        for (name, stats) in named {
+            let Some(stats) = stats else { continue };
+            if let Some((c, m)) = stats
+                .mean
+                .iter()
+                .enumerate()
+                .find(|(_, m)| !(m.is_finite() && m.abs() <= MAX_STATISTIC))
+            {
+                return Some(format!(
+                    "normalization.{name}.mean[{c}] is {m} (finite, at most {MAX_STATISTIC:e} in size)"
+                ));
+            }
+            if let Some((c, s)) = stats
+                .std
+                .iter()
+                .enumerate()
+                .find(|(_, s)| !(s.is_finite() && (MIN_STD..=MAX_STATISTIC).contains(*s)))
+            {
+                return Some(format!(
+                    "normalization.{name}.std[{c}] is {s} ({MIN_STD:e} to {MAX_STATISTIC:e})"
+                ));
+            }
+        }
+        let r = &self.material_ranges;
+        for (name, [low, high]) in [("k_s", r.k_s), ("rho", r.rho), ("log10_k_b", r.log10_k_b)] {
+            if !(low.is_finite() && high.is_finite() && low < high) {
+                return Some(format!(
+                    "material_ranges.{name} is [{low}, {high}] (an increasing pair of finite values)"
+                ));
+            }
+        }
+        None
     }
 
     /// Channels of the shards' body inputs: 0, [`BODY_CHANNELS`], or with the nearest body
@@ -648,7 +709,7 @@ pub fn write_tensors(
     )?;
     let templates_sha256 = write_atomic(&path, &bytes)?;
     let manifest = TensorManifest {
-        format: 2,
+        format: TENSORS_FORMAT,
         source: dirs
             .iter()
             .map(|d| d.display().to_string())

@@ -58,6 +58,14 @@ pub fn select(
         let of_split = all.iter().filter(|r| r.ok() && &r.split == split).cloned();
         records.extend(of_split.take(max.unwrap_or(usize::MAX)));
     }
+    // A sequence listed twice (a manifest concatenated with itself, say) would count twice.
+    for (k, r) in records.iter().enumerate() {
+        if records[..k].iter().any(|o| o.id == r.id) {
+            let line = all.iter().filter(|o| o.id == r.id).count();
+            let problem = format!("sequence '{}' is listed {line} times", r.id);
+            return Err(file_error(manifest, problem));
+        }
+    }
     if let Some(bad) = records
         .iter()
         .find(|r| r.id.is_empty() || r.id.contains(['/', '\\']) || r.id.starts_with('.'))
@@ -334,6 +342,9 @@ mod tests {
         assert_eq!(ids(one), ["a"]);
         let e = select(&all, &splits(&["nope"]), None, manifest).unwrap_err();
         assert!(e.to_string().contains("no finished sequences"), "{e}");
+        let twice = [record("a", "test", true), record("a", "test", true)];
+        let e = select(&twice, &splits(&["test"]), None, manifest).unwrap_err();
+        assert!(e.to_string().contains("'a' is listed 2 times"), "{e}");
         let bad = [record("../x", "test", true)];
         let e = select(&bad, &splits(&["test"]), None, manifest).unwrap_err();
         assert!(e.to_string().contains("not a plain file name"), "{e}");

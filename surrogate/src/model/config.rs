@@ -151,6 +151,18 @@ impl DitConfig {
         if self.condition_dim == 0 || self.condition_dim > 1 << 16 {
             return bad("condition_dim", &self.condition_dim, "must be 1 to 65536");
         }
+        let parameters = self.parameter_count();
+        if parameters > MAX_PARAMETERS {
+            return bad(
+                "width",
+                &self.width,
+                &format!(
+                    "with depth {}, mlp_ratio {} and {} condition tokens it makes {parameters} \
+                     parameters; at most {MAX_PARAMETERS} (checked before any allocation)",
+                    self.depth, self.mlp_ratio, self.condition_tokens
+                ),
+            );
+        }
         if self.body_nearest && !self.body_inputs {
             return bad(
                 "body_nearest",
@@ -191,7 +203,46 @@ impl DitConfig {
     pub fn hidden(&self) -> usize {
         ((self.width as f64 * self.mlp_ratio).round() as usize).max(1)
     }
+
+    /// The network's parameter count, from the configuration alone (what [`super::Dit::new`]
+    /// would allocate; tested equal to the built network's count).
+    pub fn parameter_count(&self) -> usize {
+        let linear = |i: usize, o: usize| i * o + o;
+        let (c, h, p2) = (self.width, self.hidden(), self.patch * self.patch);
+        let block = 6 * c
+            + 3 * c * c
+            + linear(c, c)
+            + linear(c, c)
+            + linear(c, 2 * c)
+            + linear(c, c)
+            + linear(c, 2 * h)
+            + 2 * h * 10
+            + linear(h, c);
+        linear(self.input_channels() * p2, c)
+            + linear(FREQUENCY_DIM, c)
+            + linear(c, c)
+            + linear(c, 6 * c)
+            + linear(self.condition_dim, c)
+            + linear(c, self.condition_tokens * c)
+            + self.depth * block
+            + 2 * c
+            + linear(c, OUTPUT_CHANNELS * p2)
+    }
+
+    /// Bytes one training sample's activations take, estimated high: every block keeps about
+    /// a dozen token-wide and eight hidden-wide tensors for the backward pass, and the input
+    /// and target images a few copies each.
+    pub fn activation_bytes_per_sample(&self) -> usize {
+        let tokens = self.grid() * self.grid();
+        let texels = self.resolution * self.resolution;
+        let per_block = tokens * (12 * self.width + 8 * self.hidden());
+        4 * (self.depth * per_block + 8 * texels * (self.input_channels() + OUTPUT_CHANNELS))
+    }
 }
+
+/// The most parameters a network may have here: 100 M (400 MB of f32, about 1.6 GB with the
+/// optimizer's moments and the gradients); the shipped network has 1.4 M.
+pub const MAX_PARAMETERS: usize = 100_000_000;
 
 #[cfg(test)]
 mod tests {

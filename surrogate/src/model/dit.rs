@@ -211,6 +211,31 @@ mod tests {
 
     use crate::model::tests::tiny;
 
+    /// The count validation bounds before allocating is the count the network gets.
+    #[test]
+    fn the_parameter_count_is_known_before_building() {
+        let device = Device::flex();
+        let patch2 = DitConfig {
+            patch: 2,
+            mlp_ratio: 1.7,
+            condition_tokens: 3,
+            body_inputs: true,
+            body_nearest: true,
+            ..tiny()
+        };
+        for config in [tiny(), patch2, DitConfig::default()] {
+            let built = Dit::new(&config, &device).parameters();
+            assert_eq!(config.parameter_count(), built, "{config:?}");
+        }
+        let huge = DitConfig {
+            width: 4096,
+            depth: 64,
+            ..DitConfig::default()
+        };
+        let err = huge.validate().unwrap_err().to_string();
+        assert!(err.contains("parameters; at most 100000000"), "{err}");
+    }
+
     fn inputs(
         b: usize,
         device: &Device,

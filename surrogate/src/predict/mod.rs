@@ -372,6 +372,15 @@ impl<'a> Predictor<'a> {
                 timing.guidance_s += t.guidance_s;
                 timing.other_s += t.other_s;
                 for frame in &frames {
+                    // Finite weights and statistics can still overflow (a condition far outside
+                    // training); non-finite cloth is never handed on as a prediction.
+                    if !frame.garment.iter().flatten().all(|v| v.is_finite()) {
+                        return Err(Error::Invalid(format!(
+                            "frame {}: the model predicted a non-finite vertex (its weights or \
+                             statistics do not fit this input)",
+                            frame.index
+                        )));
+                    }
                     on_frame(frame)?;
                 }
             }

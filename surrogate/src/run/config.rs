@@ -221,11 +221,30 @@ pub struct RunConfig {
     pub training: TrainConfig,
 }
 
+/// The most memory a training batch's activations may take, estimated before any
+/// allocation ([`crate::model::DitConfig::activation_bytes_per_sample`]).
+const MAX_ACTIVATION_BYTES: f64 = 16.0 * GIB;
+const GIB: f64 = (1u64 << 30) as f64;
+
 impl RunConfig {
     /// Both halves checked.
     pub fn validate(&self) -> Result<()> {
         self.model.validate()?;
-        self.training.validate()
+        self.training.validate()?;
+        let bytes = self.training.batch as f64 * self.model.activation_bytes_per_sample() as f64;
+        if bytes > MAX_ACTIVATION_BYTES {
+            return Err(bad_value(
+                "training.batch",
+                &self.training.batch,
+                &format!(
+                    "needs about {:.1} GiB of activations with this network; at most {:.0} GiB \
+                     (a smaller batch or network)",
+                    bytes / GIB,
+                    MAX_ACTIVATION_BYTES / GIB
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// As TOML.
@@ -332,6 +351,21 @@ fn read_text(path: &std::path::Path) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A batch whose activations would not fit is refused from the configuration alone; the
+    /// shipped recipe's batch is far inside the bound.
+    #[test]
+    fn a_batch_too_large_for_memory_is_refused_before_training() {
+        let mut c = RunConfig::default();
+        c.training.batch = 32;
+        assert!(c.validate().is_ok());
+        c.training.batch = 4096;
+        let err = c.validate().unwrap_err().to_string();
+        assert!(
+            err.starts_with("training.batch = 4096: needs about"),
+            "{err}"
+        );
+    }
 
     #[test]
     fn unknown_keys_and_bad_values_are_named() {

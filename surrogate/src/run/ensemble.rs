@@ -20,6 +20,10 @@ use crate::error::{Result, file_error};
 /// The file that makes a folder an ensemble.
 pub const ENSEMBLE_FILE: &str = "ensemble.toml";
 
+/// The most networks an ensemble averages: each costs a network call per frame, and past a
+/// few the mean stops improving (docs/SURROGATE.md, "An ensemble of trained models").
+pub const MAX_MEMBERS: usize = 16;
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct EnsembleFile {
@@ -41,6 +45,34 @@ pub fn load_ensemble(dir: &Path, device: &Device) -> Result<TrainedModel> {
                 file.members.len()
             ),
         ));
+    }
+    if file.members.len() > MAX_MEMBERS {
+        return Err(file_error(
+            &path,
+            format!(
+                "members: {} run folders; at most {MAX_MEMBERS} (each is a network call per frame)",
+                file.members.len()
+            ),
+        ));
+    }
+    // The same run twice would weigh one network double, whatever its spelling.
+    let resolved: Vec<PathBuf> = file
+        .members
+        .iter()
+        .map(|m| dir.join(m).canonicalize().unwrap_or_else(|_| dir.join(m)))
+        .collect();
+    for (k, run) in resolved.iter().enumerate() {
+        if let Some(first) = resolved[..k].iter().position(|r| r == run) {
+            return Err(file_error(
+                &path,
+                format!(
+                    "members {} and {} are the same run folder ({})",
+                    first + 1,
+                    k + 1,
+                    run.display()
+                ),
+            ));
+        }
     }
     let (mut head, head_tensors) = load_member(dir, &path, &file.members[0], device)?;
     let mut members = Vec::new();

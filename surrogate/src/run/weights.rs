@@ -105,7 +105,22 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     if !weights.exists() {
         return Err(file_error(&weights, "missing (train the model first)"));
     }
-    check_model_weights(&weights)?;
+    // Counted before the network is built, so the weights of a far larger network are
+    // refused without allocating it.
+    let (values, expected) = (
+        check_model_weights(&weights)?,
+        config.model.parameter_count(),
+    );
+    if values != expected {
+        return Err(file_error(
+            &weights,
+            format!(
+                "does not fit {}: it holds {values} values, that network has {expected} \
+                 parameters (the weights of another model)",
+                config_path.display()
+            ),
+        ));
+    }
     let mut model = Dit::new(&config.model, device);
     let mut store = SafetensorsStore::from_file(&weights).with_from_adapter(PyTorchToBurnAdapter);
     let result = model.load_from(&mut store).map_err(|e| {
@@ -167,6 +182,9 @@ impl TrainedModel {
         let path = run.join(TENSORS_MANIFEST);
         let text = files::read_to_string(&path, files::limits::TEXT, "tensors manifest")?;
         let data: TensorManifest = serde_json::from_str(&text).map_err(|e| file_error(&path, e))?;
+        if let Some(problem) = data.statistics_problem() {
+            return Err(file_error(&path, problem));
+        }
         let m = &config.model;
         let problem = if data.resolution != m.resolution {
             Some(format!(
@@ -227,11 +245,12 @@ pub(crate) fn check_weights_file(path: &Path) -> Result<()> {
 /// Refuses, before burn reads it, a `model.safetensors` that [`check_weights_file`] refuses,
 /// that is not safetensors, or that holds a tensor that is not F32 (burn loads F16 or F64 and
 /// then panics in the first matrix product) or a value that is not finite or beyond
-/// [`MAX_WEIGHT`]; the error names the tensor.
-fn check_model_weights(path: &Path) -> Result<()> {
+/// [`MAX_WEIGHT`]; the error names the tensor. Returns how many values the tensors hold.
+fn check_model_weights(path: &Path) -> Result<usize> {
     let bytes = files::read(path, files::limits::TENSORS, "weights file")?;
     let tensors = safetensors::SafeTensors::deserialize(&bytes)
         .map_err(|e| file_error(path, format!("not a safetensors file: {e}")))?;
+    let mut values = 0;
     for (name, view) in tensors.tensors() {
         if view.dtype() != safetensors::Dtype::F32 {
             return Err(file_error(
@@ -256,6 +275,7 @@ fn check_model_weights(path: &Path) -> Result<()> {
                 ),
             ));
         }
+        values += view.data().len() / 4;
     }
-    Ok(())
+    Ok(values)
 }
