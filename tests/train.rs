@@ -448,4 +448,62 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
         }
         std::fs::write(&path, &original).unwrap();
     }
+
+    // A resume that cannot continue changes nothing: a checkpoint of another configuration
+    // leaves config.toml as it was; a finished model without checkpoints (as the shipped
+    // ones are), or checkpoints without checkpoint.json, is never retrained over.
+    let files_of = |dir: &Path| -> Vec<(String, Vec<u8>)> {
+        let mut all: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .filter(|e| e.path().is_file())
+            .map(|e| {
+                let name = e.file_name().to_string_lossy().into_owned();
+                (name, std::fs::read(e.path()).unwrap())
+            })
+            .collect();
+        all.sort();
+        all
+    };
+    let text = std::fs::read_to_string(&saved).unwrap();
+    std::fs::write(&saved, text.replace("lr = ", "lr = 0.5 #")).unwrap();
+    let before = files_of(&run);
+    fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    assert!(
+        files_of(&run) == before,
+        "a refused resume rewrote the run folder"
+    );
+    std::fs::write(&saved, text).unwrap();
+    let finished = dir.path().join("finished");
+    std::fs::create_dir_all(&finished).unwrap();
+    for file in ["config.toml", "tensors.json", "model.safetensors"] {
+        std::fs::copy(run.join(file), finished.join(file)).unwrap();
+    }
+    let before = files_of(&finished);
+    let finished_s = finished.to_str().unwrap();
+    let err = fails(&train_args(
+        finished_s,
+        &cfg,
+        &["--steps", "20", "--resume"],
+    ));
+    assert!(
+        err.contains("a finished model without checkpoints"),
+        "{err}"
+    );
+    assert!(
+        files_of(&finished) == before,
+        "the finished model was touched"
+    );
+    std::fs::remove_file(run.join("checkpoint.json")).unwrap();
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    assert!(
+        err.contains("a finished model without checkpoints"),
+        "{err}"
+    );
+    std::fs::remove_file(run.join("model.safetensors")).unwrap();
+    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    assert!(
+        err.contains("checkpoint folders without the checkpoint.json"),
+        "{err}"
+    );
 }

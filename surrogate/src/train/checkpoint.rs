@@ -159,11 +159,31 @@ pub struct Loaded {
     pub state: RunState,
 }
 
-/// The run's last checkpoint, or `None` when it has none yet. A checkpoint of another
-/// configuration, or a damaged one, is an error naming the file.
-pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Loaded>> {
+/// The checkpoint folder a resume of `run` would continue from and its step, checked against `config`
+/// without loading any weights, so a resume that cannot continue is refused before anything
+/// is written. `None` for a run that never reached a checkpoint and never finished (it starts
+/// again); a finished model without `checkpoint.json` (the shipped ones), or checkpoint folders
+/// without it, is refused: resuming would retrain and replace it.
+pub fn resumable(run: &Path, config: &RunConfig) -> Result<Option<(PathBuf, usize)>> {
     let pointer_path = run.join("checkpoint.json");
     if !pointer_path.exists() {
+        let finished = run.join("model.safetensors").exists();
+        let orphans = std::fs::read_dir(run).ok().is_some_and(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.file_name().to_string_lossy().starts_with("checkpoint-"))
+        });
+        if finished || orphans {
+            let what = if finished {
+                "a finished model without checkpoints"
+            } else {
+                "checkpoint folders without the checkpoint.json that names the last"
+            };
+            return Err(file_error(
+                run,
+                format!("holds {what}: --resume cannot continue it (train into a new folder)"),
+            ));
+        }
         return Ok(None);
     }
     let text = files::read_to_string(&pointer_path, files::limits::TEXT, "checkpoint pointer")?;
@@ -186,6 +206,15 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
             ),
         ));
     }
+    Ok(Some((dir, pointer.step)))
+}
+
+/// The run's last checkpoint, or `None` when it has none yet. A checkpoint of another
+/// configuration, or a damaged one, is an error naming the file.
+pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Loaded>> {
+    let Some((dir, step)) = resumable(run, config)? else {
+        return Ok(None);
+    };
     let damaged = |file: &str, e: &dyn std::fmt::Display| {
         file_error(&dir.join(file), format!("damaged or of another model: {e}"))
     };
@@ -203,7 +232,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     let text = files::read_to_string(&state_path, files::limits::TEXT, "run state")?;
     let state: RunState = serde_json::from_str(&text)
         .map_err(|e| file_error(&state_path, format!("damaged: {e}")))?;
-    if state.step != pointer.step {
+    if state.step != step {
         return Err(file_error(&state_path, "does not match checkpoint.json"));
     }
     Ok(Some(Loaded {

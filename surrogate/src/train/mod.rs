@@ -216,6 +216,8 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
                 ));
             }
         }
+        // Refused here, before a file is written, if it cannot continue.
+        checkpoint::resumable(run, &config)?;
     } else if config_path.exists() || run.join("checkpoint.json").exists() {
         return Err(file_error(
             run,
