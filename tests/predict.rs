@@ -533,6 +533,61 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
         s(&scores),
     ]);
     assert!(e.contains("no finished sequences"), "{e}");
+
+    // A manifest whose label disagrees with the recording, or that lists a sequence twice, is
+    // refused naming the sequence.
+    let copy = dir.path().join("relabelled");
+    let status = std::process::Command::new("cp")
+        .args(["-r", s(&data), s(&copy)])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let manifest = copy.join("manifest.jsonl");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let mut lines: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let k = lines.iter().position(|l| l["status"] == "ok").unwrap();
+    let id = lines[k]["id"].as_str().unwrap().to_string();
+    lines[k]["motion"] = "kick".into();
+    let write = |lines: &[serde_json::Value]| {
+        let body: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        std::fs::write(&manifest, body.join("\n") + "\n").unwrap();
+    };
+    write(&lines);
+    let evaluate_copy = || {
+        fails(&[
+            "evaluate",
+            "--model",
+            "none",
+            "--data",
+            s(&copy),
+            "--baselines",
+            "lbs",
+            "--splits",
+            lines[k]["split"].as_str().unwrap(),
+            "--json",
+            s(&scores),
+        ])
+    };
+    let e = evaluate_copy();
+    assert!(
+        e.contains(&format!("the manifest's line for sequence {id} says")) && e.contains("'kick'"),
+        "{e}"
+    );
+    let original: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let mut twice = original.clone();
+    twice.push(original[k].clone());
+    write(&twice);
+    let e = evaluate_copy();
+    assert!(
+        e.contains(&format!("sequence '{id}' is listed 2 times")),
+        "{e}"
+    );
 }
 
 /// The network's inputs are the same whether they come from the training tensors or from

@@ -208,6 +208,22 @@ impl Evaluation<'_> {
             }
         }
         let seq = Sequence::read(&path)?;
+        // Results are grouped by the manifest's labels: they must be the recording's own (a
+        // garment file is recorded under its file name's stem).
+        let stem = Path::new(&record.garment)
+            .file_stem()
+            .map(|s| s.to_string_lossy());
+        let garment_agrees =
+            seq.meta.garment == record.garment || stem.is_some_and(|s| s == seq.meta.garment);
+        if !garment_agrees || seq.meta.motion != record.motion {
+            return Err(file_error(
+                &path,
+                format!(
+                    "holds '{}' on '{}', but the manifest's line for sequence {} says '{}' on '{}'",
+                    seq.meta.garment, seq.meta.motion, record.id, record.garment, record.motion
+                ),
+            ));
+        }
         let truth = Truth::new(&seq, self.body, 0).map_err(|e| file_error(&path, e))?;
         let frames = truth.frames();
         let mut methods = BTreeMap::new();
