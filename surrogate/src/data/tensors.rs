@@ -371,9 +371,12 @@ fn body_stats(sum: &[f64], sum2: &[f64], count: f64) -> Stats {
     s
 }
 
+/// A finished sequence: its manifest line, its recording's path, the recording parsed.
+type Finished = (ManifestRecord, PathBuf, Sequence);
+
 /// The dataset's finished sequences, each read once: checked against its manifest checksum,
 /// then parsed.
-fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
+fn finished(dir: &Path) -> Result<Vec<Finished>> {
     let path = dir.join("manifest.jsonl");
     let mut records: Vec<ManifestRecord> = files::read_json_lines(&path, "dataset manifest")?;
     records.retain(ManifestRecord::ok);
@@ -404,16 +407,14 @@ fn finished(dir: &Path) -> Result<Vec<(ManifestRecord, PathBuf, Sequence)>> {
 /// The finished sequences of several datasets, and the material ranges their conditions are
 /// scaled by: every dataset's spec must give the same ranges (a condition means one material
 /// in all of them), and no sequence may come twice (the same dataset given twice).
-fn combined(
-    dirs: &[PathBuf],
-) -> Result<(MaterialRanges, Vec<(ManifestRecord, PathBuf, Sequence)>)> {
+fn combined(dirs: &[PathBuf]) -> Result<(MaterialRanges, Vec<Finished>)> {
     let Some(first) = dirs.first() else {
         return Err(crate::error::Error::Invalid(
             "no dataset folder given".into(),
         ));
     };
     let material = DatasetSpec::load(&first.join("spec.toml"))?.material;
-    let mut all: Vec<(ManifestRecord, PathBuf, Sequence)> = Vec::new();
+    let mut all: Vec<Finished> = Vec::new();
     for dir in dirs {
         let path = dir.join("spec.toml");
         let spec = DatasetSpec::load(&path)?;

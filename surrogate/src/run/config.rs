@@ -235,7 +235,7 @@ impl RunConfig {
         if bytes > MAX_ACTIVATION_BYTES {
             return Err(bad_value(
                 "training.batch",
-                &self.training.batch,
+                self.training.batch,
                 &format!(
                     "needs about {:.1} GiB of activations with this network; at most {:.0} GiB \
                      (a smaller batch or network)",
