@@ -127,7 +127,7 @@ fn load_member(
             format!("member {}: not a run folder", run.display()),
         ));
     }
-    let trained = TrainedModel::load(&run, device)?;
+    let trained = TrainedModel::load_run_folder(&run, device)?;
     let manifest = run.join(super::TENSORS_MANIFEST);
     let tensors = files::read_to_string(&manifest, files::limits::TEXT, "tensors manifest")?;
     Ok((trained, tensors))

@@ -18,6 +18,24 @@ pub use weights::{COMMIT, Provenance, TENSORS_MANIFEST, TrainedModel, load_run, 
 
 use crate::error::{Error, Result};
 
+impl TrainedModel {
+    /// The model a name stands for ([`model_dir`]: `builtin`, `builtin-single`, a run or
+    /// ensemble folder).
+    pub fn load_named(name: &str, device: &burn::prelude::Device) -> Result<Self> {
+        Self::load(&model_dir(name)?, device)
+    }
+
+    /// Loads a run folder ([`TrainedModel::load_run_folder`]) or an ensemble folder
+    /// (`ensemble.toml`, [`ensemble::load_ensemble`]). Here, not in either module, so the
+    /// ensemble builds on single runs without the two importing each other.
+    pub fn load(dir: &Path, device: &burn::prelude::Device) -> Result<Self> {
+        if dir.join(ENSEMBLE_FILE).is_file() {
+            return ensemble::load_ensemble(dir, device);
+        }
+        Self::load_run_folder(dir, device)
+    }
+}
+
 /// The shipped model, which `--model builtin` names: an ensemble folder averaging two
 /// networks of one recipe trained with seeds 0 and 1 (held-out E_v 2.250 cm against 2.325 for
 /// the first alone, at two network calls a frame).

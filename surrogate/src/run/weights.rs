@@ -155,7 +155,7 @@ pub struct TrainedModel {
     /// The network with the EMA weights.
     pub model: Dit,
     /// Further networks whose outputs are averaged with `model`'s: the other members of an
-    /// ensemble folder ([`super::ensemble`]); empty for a run folder.
+    /// ensemble folder; empty for a run folder.
     pub members: Vec<Dit>,
     /// The run folder of each network, `model`'s first, then the `members`'.
     pub networks: Vec<std::path::PathBuf>,
@@ -166,18 +166,9 @@ pub struct TrainedModel {
 }
 
 impl TrainedModel {
-    /// The model a name stands for ([`super::model_dir`]: `builtin`, `builtin-single`, a run
-    /// or ensemble folder).
-    pub fn load_named(name: &str, device: &Device) -> Result<Self> {
-        Self::load(&super::model_dir(name)?, device)
-    }
-
     /// Loads a run folder (see [`load_run`]) and its `tensors.json`, checked against the
-    /// configuration, or an ensemble folder (`ensemble.toml`, [`super::ensemble`]).
-    pub fn load(run: &Path, device: &Device) -> Result<Self> {
-        if run.join(super::ensemble::ENSEMBLE_FILE).is_file() {
-            return super::ensemble::load_ensemble(run, device);
-        }
+    /// configuration. An ensemble folder is loaded by [`TrainedModel::load`].
+    pub fn load_run_folder(run: &Path, device: &Device) -> Result<Self> {
         let (config, model) = load_run(run, device)?;
         let path = run.join(TENSORS_MANIFEST);
         let text = files::read_to_string(&path, files::limits::TEXT, "tensors manifest")?;
