@@ -15,7 +15,7 @@ use files::write_json;
 use surrogate::predict::{SceneRequest, predict_scene};
 
 use crate::run::frames_bar;
-use crate::run::{prepare, resolve_inputs, set_threads};
+use crate::run::{prepare, resolve_inputs, scene_input, set_threads};
 
 pub fn run(args: &PredictArgs) -> Result<()> {
     let started = Instant::now();
@@ -51,10 +51,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         out: &args.out,
         obj_dir: args.obj_dir.as_deref(),
         body_vertices: args.body_vertices,
-        software: &software,
     };
     let bar = frames_bar("predicting", prepared.scene.num_frames(), args.quiet);
-    let p = predict_scene(&prepared, &request, &mut || bar.inc(1))?;
+    let p = predict_scene(&scene_input(&prepared, &software), &request, &mut || {
+        bar.inc(1)
+    })?;
     bar.finish_and_clear();
     let (garment, scene, stats) = (&prepared.garment, &prepared.scene, &p.stats);
     let (frames, frames_per_s, seen) = (p.frames, p.frames_per_s, p.seen);

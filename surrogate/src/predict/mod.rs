@@ -15,7 +15,8 @@ pub use guidance::{
     penalty_gradient, penetration, push_out,
 };
 pub use record::{
-    PredictionStats, Recorded, ScenePrediction, SceneRequest, predict_scene, record_prediction,
+    PredictionStats, Recorded, SceneInput, ScenePrediction, SceneRequest, predict_scene,
+    record_prediction,
 };
 
 use std::time::Instant;

@@ -10,7 +10,6 @@ use serde::Serialize;
 use serde_json::json;
 use sim::metrics::{BodySurface, FRAME_STRIDE, Scorer};
 use sim::recording::{Channels, FrameRecord, SequenceMeta, SequenceWriter, TemplateArrays};
-use sim::run::Prepared;
 use sim::scene::FPS;
 
 use super::{BodySequence, Predictor, PreparedGarment, Settings, Timing};
@@ -153,8 +152,6 @@ pub struct SceneRequest<'a> {
     pub obj_dir: Option<&'a Path>,
     /// Whether the body vertices are recorded.
     pub body_vertices: bool,
-    /// The recording's `software` entry.
-    pub software: &'a str,
 }
 
 /// What predicting a scene measured.
@@ -177,15 +174,33 @@ pub struct ScenePrediction {
     pub e_c_vertex: f64,
 }
 
-/// Predicts every frame of a prepared scene (the body poses and shapes the engine would
-/// simulate) and records it; `tick` is called after each frame.
+/// A scene to predict, as plain data: the body model, the garment template, and per frame the
+/// body's pose (blend-in included) and shape, with the material and the recording's metadata.
+/// The command line builds it from the scene the engine would simulate, so both see the same
+/// bodies; the surrogate never runs the scene itself.
+pub struct SceneInput<'a> {
+    /// The body model the frames pose.
+    pub body_model: &'a motions::BodyModel,
+    /// The garment template.
+    pub garment: &'a garments::Garment,
+    /// The body's motion, every frame predicted.
+    pub motion: motions::Motion,
+    /// The body's shape values per frame.
+    pub betas: Vec<Vec<f64>>,
+    /// The cloth's material.
+    pub material: sim::Material,
+    /// The recording's metadata.
+    pub meta: SequenceMeta,
+}
+
+/// Predicts every frame of a scene and records it; `tick` is called after each frame.
 pub fn predict_scene(
-    prepared: &Prepared,
+    input: &SceneInput,
     r: &SceneRequest,
     tick: &mut dyn FnMut(),
 ) -> Result<ScenePrediction> {
     let started = std::time::Instant::now();
-    let (model, garment, scene) = (&prepared.model, &prepared.garment, &prepared.scene);
+    let (model, garment) = (input.body_model, input.garment);
     let predictor = Predictor::new(r.trained, model)?;
     let template = TemplateArrays {
         positions: garment.positions.clone(),
@@ -196,9 +211,7 @@ pub fn predict_scene(
     let mut ready = predictor
         .garment(&template)
         .map_err(|e| Error::Invalid(format!("garment '{}': {e}", garment.name)))?;
-    let motion = scene.body_motion();
-    let frames = scene.num_frames();
-    let betas: Vec<Vec<f64>> = (0..frames).map(|k| scene.frame_betas(k)).collect();
+    let frames = input.betas.len().min(input.motion.len());
     let garment_s = started.elapsed().as_secs_f64();
     let seen = r
         .trained
@@ -211,23 +224,22 @@ pub fn predict_scene(
         "resolution": r.trained.data.resolution, "settings": r.settings,
         "template_seen_in_training": seen,
     });
-    let meta = scene.sequence_meta(&garment.name, model.name(), r.software);
     let recorded = Recorded {
         predictor: &predictor,
         garment: &mut ready,
         template: &template,
         body: BodySequence {
-            motion: &motion,
-            betas: &betas,
-            material: scene.config.material,
+            motion: &input.motion,
+            betas: &input.betas,
+            material: input.material,
         },
         frames: 0..frames,
         settings: r.settings,
-        meta: &meta,
+        meta: &input.meta,
         predicted: &predicted,
         faces: model.faces(),
         body_vertices: r.body_vertices,
-        obj: r.obj_dir.map(|d| (d, garment.as_ref())),
+        obj: r.obj_dir.map(|d| (d, garment)),
         tick,
     };
     let stats = record_prediction(r.out, recorded).map_err(|e| file_error(r.out, e))?;
