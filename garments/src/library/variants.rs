@@ -187,6 +187,18 @@ fn wide_draw(base: &Design, index: u32) -> DesignParams {
     );
     v.armhole_drop = uniform(0.0, 4.0);
     v.shoulder_half_width = uniform(15.0, 20.0);
+    neck_and_sleeves(&mut v, base, &mut uniform);
+    v
+}
+
+/// The neckline and the sleeves drawn over the library's range (the last draws of a wide or
+/// dress variant, in this order): neck width 10-14 cm, back depth 2.5-5, front depth 4-18, the
+/// neckline type among all three, and for a sleeved base sleeve length 9-57 and cuff 9-19.
+fn neck_and_sleeves(
+    v: &mut DesignParams,
+    base: &Design,
+    uniform: &mut impl FnMut(f64, f64) -> f64,
+) {
     v.neck_half_width = uniform(10.0, 14.0);
     v.back_neck_depth = uniform(2.5, 5.0);
     v.front_neck_depth = uniform(4.0, 18.0);
@@ -199,7 +211,6 @@ fn wide_draw(base: &Design, index: u32) -> DesignParams {
         v.sleeve_length = uniform(9.0, 57.0);
         v.cuff_half_width = uniform(9.0, 19.0);
     }
-    v
 }
 
 /// Dress variant `index` of `base`: whether it has sleeves is its base's; the hem drawn from
@@ -216,18 +227,7 @@ fn dress_draw(base: &Design, index: u32) -> DesignParams {
     v.hem_half_width = uniform(v.chest_half_width + 2.0, v.chest_half_width + 20.0).min(50.0);
     v.armhole_drop = uniform(0.0, 4.5);
     v.shoulder_half_width = uniform(15.5, 19.5);
-    v.neck_half_width = uniform(10.0, 14.0);
-    v.back_neck_depth = uniform(2.5, 5.0);
-    v.front_neck_depth = uniform(4.0, 18.0);
-    v.neckline = match uniform(0.0, 3.0) {
-        x if x < 1.0 => Neckline::Round,
-        x if x < 2.0 => Neckline::V,
-        _ => Neckline::Scoop,
-    };
-    if base.params.sleeve_length > 0.0 {
-        v.sleeve_length = uniform(9.0, 57.0);
-        v.cuff_half_width = uniform(9.0, 19.0);
-    }
+    neck_and_sleeves(&mut v, base, &mut uniform);
     v
 }
 
