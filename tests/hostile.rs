@@ -670,6 +670,16 @@ fn model_folders_that_cannot_be_right_are_refused_at_load() {
             "material_ranges.k_s is [100, 100]",
         ),
         ("/format", serde_json::json!(99), "format 99"),
+        (
+            "/condition_layout/window",
+            serde_json::json!(usize::MAX),
+            "condition_layout.window is 18446744073709551615",
+        ),
+        (
+            "/condition_layout/betas",
+            serde_json::json!(11),
+            "condition_layout makes 548 values, condition_dim says 547",
+        ),
     ];
     for (k, (pointer, value, expected)) in spoils.into_iter().enumerate() {
         let name = format!("spoiled{k}");
@@ -729,4 +739,53 @@ fn model_folders_that_cannot_be_right_are_refused_at_load() {
         dir.path().join("scores.json").to_str().unwrap(),
     ]);
     assert!(err.contains("nothing to score"), "{err}");
+}
+
+/// What sits where a model folder's files should be is named for what it is: a loop of links
+/// at `model.safetensors` is not "missing", and an `ensemble.toml` that is a directory, a
+/// FIFO or a link to `/dev/zero` is refused as that file, not blamed on a `config.toml`.
+#[cfg(unix)]
+#[test]
+fn odd_files_in_a_model_folder_are_named_for_what_they_are() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.mcap");
+    let predict = |model: &Path| {
+        fails(&[
+            "predict",
+            "--model",
+            model.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let looped = shipped_copy(&dir.path().join("looped"));
+    let weights = looped.join("model.safetensors");
+    std::fs::remove_file(&weights).unwrap();
+    std::os::unix::fs::symlink(&weights, &weights).unwrap();
+    let err = predict(&looped);
+    assert!(
+        err.contains("model.safetensors") && err.contains("loop"),
+        "{err}"
+    );
+
+    for kind in ["dir", "fifo", "zero"] {
+        let ensemble = dir.path().join(format!("ensemble_{kind}"));
+        std::fs::create_dir_all(&ensemble).unwrap();
+        let file = ensemble.join("ensemble.toml");
+        match kind {
+            "dir" => std::fs::create_dir(&file).unwrap(),
+            "fifo" => {
+                let made = std::process::Command::new("mkfifo").arg(&file).status();
+                if !made.is_ok_and(|s| s.success()) {
+                    continue;
+                }
+            }
+            _ => std::os::unix::fs::symlink("/dev/zero", &file).unwrap(),
+        }
+        let err = predict(&ensemble);
+        assert!(
+            err.contains("ensemble.toml") && !err.contains("config.toml"),
+            "{kind}: {err}"
+        );
+    }
 }

@@ -200,6 +200,28 @@ impl TensorManifest {
                 self.format
             ));
         }
+        if let Some(layout) = &self.condition_layout {
+            // Bounded before the layout's size is computed, which would overflow.
+            if layout.window > 64 {
+                return Some(format!(
+                    "condition_layout.window is {} (at most 64 earlier frames)",
+                    layout.window
+                ));
+            }
+            if layout.betas > 300 {
+                return Some(format!(
+                    "condition_layout.betas is {} (at most 300 shape values)",
+                    layout.betas
+                ));
+            }
+            if layout.dim() != self.condition_dim {
+                return Some(format!(
+                    "condition_layout makes {} values, condition_dim says {}",
+                    layout.dim(),
+                    self.condition_dim
+                ));
+            }
+        }
         let n = &self.normalization;
         let named = [
             ("targets", Some(&n.targets)),

@@ -29,7 +29,9 @@ impl TrainedModel {
     /// (`ensemble.toml`, [`ensemble::load_ensemble`]). Here, not in either module, so the
     /// ensemble builds on single runs without the two importing each other.
     pub fn load(dir: &Path, device: &burn::prelude::Device) -> Result<Self> {
-        if dir.join(ENSEMBLE_FILE).is_file() {
+        // Anything by that name makes it an ensemble folder: a directory, a FIFO or a device
+        // there is refused by the ensemble's reader, naming it, not taken for a run folder.
+        if dir.join(ENSEMBLE_FILE).symlink_metadata().is_ok() {
             return ensemble::load_ensemble(dir, device);
         }
         Self::load_run_folder(dir, device)

@@ -103,7 +103,12 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     config.validate().map_err(|e| file_error(&config_path, e))?;
     let weights = run.join("model.safetensors");
     if !weights.exists() {
-        return Err(file_error(&weights, "missing (train the model first)"));
+        // A link to nothing (or a loop of links) is there, just not readable.
+        let problem = match weights.symlink_metadata() {
+            Ok(_) => "a link that leads to no file (or a loop of links)",
+            Err(_) => "missing (train the model first)",
+        };
+        return Err(file_error(&weights, problem));
     }
     // Counted before the network is built, so the weights of a far larger network are
     // refused without allocating it.
