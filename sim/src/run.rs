@@ -101,12 +101,7 @@ impl Prepared {
         let meta = self
             .scene
             .sequence_meta(&self.garment.name, self.model.name(), software);
-        let template = TemplateArrays {
-            positions: self.garment.positions.clone(),
-            triangles: self.garment.triangles.clone(),
-            uvs: self.garment.uvs.clone(),
-            uv_triangles: self.garment.uv_triangles.clone(),
-        };
+        let template = TemplateArrays::from(&*self.garment);
         let recorded = self.scene.config.record;
         let channels = Channels {
             template: Some(&template),

@@ -35,12 +35,7 @@ pub fn run(args: &UvArgs) -> Result<()> {
         (sequence.template.clone(), Some(sequence))
     } else {
         let (g, _) = inputs::garment(&args.source, &model)?;
-        let t = TemplateArrays {
-            positions: g.positions,
-            triangles: g.triangles,
-            uvs: g.uvs,
-            uv_triangles: g.uv_triangles,
-        };
+        let t = TemplateArrays::from(&g);
         (t, None)
     };
     let image = GeometryImage::of_template(&template, args.resolution)

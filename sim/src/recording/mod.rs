@@ -123,6 +123,18 @@ pub struct TemplateArrays {
     pub uv_triangles: Vec<[u32; 3]>,
 }
 
+impl From<&garments::Garment> for TemplateArrays {
+    /// The arrays a recording stores of a garment template (its rest mesh and UV layout).
+    fn from(g: &garments::Garment) -> Self {
+        Self {
+            positions: g.positions.clone(),
+            triangles: g.triangles.clone(),
+            uvs: g.uvs.clone(),
+            uv_triangles: g.uv_triangles.clone(),
+        }
+    }
+}
+
 /// Body pose message of one frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PoseRecord {

@@ -157,12 +157,7 @@ pub fn bless(reason: &str) -> Result<Vec<std::path::PathBuf>> {
         let software = format!("sim {}", env!("CARGO_PKG_VERSION"));
         let garment_name = format!("{} (48 x 16)", garment.name);
         let meta = scene.sequence_meta(&garment_name, model.name(), &software);
-        let template = TemplateArrays {
-            positions: garment.positions.clone(),
-            triangles: garment.triangles.clone(),
-            uvs: garment.uvs.clone(),
-            uv_triangles: garment.uv_triangles.clone(),
-        };
+        let template = TemplateArrays::from(&garment);
         let channels = Channels {
             template: Some(&template),
             stats: true,

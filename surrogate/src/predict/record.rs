@@ -202,12 +202,7 @@ pub fn predict_scene(
     let started = std::time::Instant::now();
     let (model, garment) = (input.body_model, input.garment);
     let predictor = Predictor::new(r.trained, model)?;
-    let template = TemplateArrays {
-        positions: garment.positions.clone(),
-        triangles: garment.triangles.clone(),
-        uvs: garment.uvs.clone(),
-        uv_triangles: garment.uv_triangles.clone(),
-    };
+    let template = TemplateArrays::from(garment);
     let mut ready = predictor
         .garment(&template)
         .map_err(|e| Error::Invalid(format!("garment '{}': {e}", garment.name)))?;
