@@ -140,7 +140,7 @@ pub enum Error {
         /// Output frame index.
         frame: usize,
         /// What was detected.
-        reason: String,
+        reason: BlowUpCause,
         /// Retries made.
         retries: usize,
     },
@@ -209,4 +209,22 @@ impl Error {
             expected: expected.to_string(),
         }
     }
+}
+
+/// What made the solver give a frame up.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum BlowUpCause {
+    /// A position or velocity became NaN or infinite.
+    #[error("non-finite position or velocity")]
+    NonFinite,
+    /// A vertex moved faster than the solver's limit (energy explosion).
+    #[error("vertex {vertex} reached {speed:.1} m/s (limit {limit} m/s): energy explosion")]
+    TooFast {
+        /// The fastest vertex.
+        vertex: usize,
+        /// Its speed, m/s.
+        speed: f64,
+        /// `solver.max_speed`, m/s.
+        limit: f64,
+    },
 }

@@ -39,7 +39,7 @@ pub use cloth::{ClothMesh, ClothState, Vec3};
 pub use config::SceneConfig;
 pub use constraints::{Attachment, BendingRest, Seam, Spring};
 pub use contact::Contact;
-pub use error::{Error, MeshError, Result};
+pub use error::{BlowUpCause, Error, MeshError, Result};
 pub use params::{Material, SolverParams};
 pub use self_intersection::{count_self_intersections, self_intersecting_pairs};
 pub use solver::{ClothSetup, FrameReport, Solver, Stage, StageTimes, StepReport};

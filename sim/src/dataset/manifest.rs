@@ -92,10 +92,11 @@ impl GateResult {
         }
     }
 
-    /// An attempt that did not finish: it ran out of time or the solver failed.
-    pub fn unfinished(reason: String, timed_out: bool) -> GateResult {
+    /// An attempt that did not finish: it ran out of time, could not be set up, or the solver
+    /// gave a frame up (`finite` false when that was for a non-finite value).
+    pub fn unfinished(reason: String, timed_out: bool, finite: bool) -> GateResult {
         GateResult {
-            finite: !reason.contains("finite"),
+            finite,
             max_penetration_m: f64::NAN,
             max_verts_inside: 0,
             max_penetration_overlap_m: f64::NAN,
@@ -246,7 +247,7 @@ mod tests {
 
     #[test]
     fn an_unfinished_attempt_reads_back_from_its_json() {
-        let gates = GateResult::unfinished("ran out of time".into(), true);
+        let gates = GateResult::unfinished("ran out of time".into(), true, true);
         let line = serde_json::to_string(&gates).unwrap();
         assert!(line.contains("\"max_penetration_m\":null"), "{line}");
         let back: GateResult = serde_json::from_str(&line).unwrap();

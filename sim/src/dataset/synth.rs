@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use super::{
     Attempt, DatasetDir, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, finished_record,
 };
-use crate::error::{Error, Result};
+use crate::error::{BlowUpCause, Error, Result};
 use crate::run::Prepared;
 use crate::scene::BodyAttachment;
 use crate::{SceneConfig, SolverParams};
@@ -90,7 +90,7 @@ impl Synthesis<'_> {
             let solver = self
                 .config(p, spec.solver.substeps, spec.solver.max_iterations)
                 .solver;
-            let gates = GateResult::unfinished(format!("could not set up: {why}"), false);
+            let gates = GateResult::unfinished(format!("could not set up: {why}"), false, true);
             return Ok(self.record(
                 p,
                 vec![Attempt {
@@ -137,7 +137,7 @@ impl Synthesis<'_> {
                 config,
             );
             let gates = match prepared {
-                Err(e) => GateResult::unfinished(format!("could not set up: {e}"), false),
+                Err(e) => GateResult::unfinished(format!("could not set up: {e}"), false, true),
                 Ok(prepared) => {
                     frames = prepared.scene.num_frames();
                     let deadline = attempt_started + Duration::from_secs_f64(spec.gates.timeout_s);
@@ -146,8 +146,18 @@ impl Synthesis<'_> {
                         Err(Error::Deadline { .. }) => GateResult::unfinished(
                             format!("time-out after {} s", spec.gates.timeout_s),
                             true,
+                            true,
                         ),
-                        Err(e) => GateResult::unfinished(format!("solver: {e}"), false),
+                        Err(e) => {
+                            let finite = !matches!(
+                                e,
+                                Error::BlowUp {
+                                    reason: BlowUpCause::NonFinite,
+                                    ..
+                                }
+                            );
+                            GateResult::unfinished(format!("solver: {e}"), false, finite)
+                        }
                     }
                 }
             };

@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use crate::cloth::{ClothState, Vec3};
 use crate::constraints::{Constraints, ProjectionInputs};
 use crate::contact::Contact;
-use crate::error::{Error, Result};
+use crate::error::{BlowUpCause, Error, Result};
 use crate::obstacles::Obstacles;
 use crate::params::SolverParams;
 use crate::self_contact::{SelfContact, SelfContactDetector};
@@ -338,7 +338,7 @@ impl Solver {
         first_retry: usize,
     ) -> Result<FrameReport> {
         let saved = state.clone();
-        let mut reason = String::new();
+        let mut reason = BlowUpCause::NonFinite;
         for retry in first_retry..=self.params.max_retries {
             let substeps = self.params.substeps << retry;
             self.system_for(substeps)?;
@@ -378,9 +378,9 @@ impl Solver {
         })
     }
 
-    fn check(&self, state: &ClothState) -> Option<String> {
+    fn check(&self, state: &ClothState) -> Option<BlowUpCause> {
         if !state.is_finite() {
-            return Some("non-finite position or velocity".into());
+            return Some(BlowUpCause::NonFinite);
         }
         let (i, speed) = state
             .velocities
@@ -388,11 +388,10 @@ impl Solver {
             .enumerate()
             .map(|(i, v)| (i, v.norm()))
             .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-        (speed > self.params.max_speed).then(|| {
-            format!(
-                "vertex {i} reached {speed:.1} m/s (limit {} m/s): energy explosion",
-                self.params.max_speed
-            )
+        (speed > self.params.max_speed).then_some(BlowUpCause::TooFast {
+            vertex: i,
+            speed,
+            limit: self.params.max_speed,
         })
     }
 }
