@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use safetensors::SafeTensors;
 use safetensors::tensor::Dtype;
 
-use super::tensors::TensorManifest;
+use super::manifest::TensorManifest;
 use crate::error::{Result, file_error};
 
 /// A tensors folder: its manifest and its templates, normalized.

@@ -1,9 +1,10 @@
 //! What a model learns from: the condition vector of a frame (`conditions.rs`), recorded
 //! sequences with their UV round-trip floor (`sequence.rs`), and a dataset as training tensors
-//! (`tensors.rs`).
+//! (`tensors.rs`, described by its `manifest.json`: `manifest.rs`).
 
 mod conditions;
 mod frames;
+mod manifest;
 mod sequence;
 mod stats;
 mod tensors;
@@ -12,10 +13,10 @@ pub use conditions::{
     Block, BlockScaling, CONDITION_JOINTS, ConditionLayout, ConditionScaling, VELOCITIES,
 };
 pub use frames::{Frames, TrainingTensors};
+pub use manifest::{
+    Normalization, ShardInfo, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest,
+};
 pub use sequence::{Floor, Sequence, roundtrip_floor};
 pub use stats::Stats;
 pub(crate) use tensors::channels_first;
-pub use tensors::{
-    Normalization, ShardInfo, SplitInfo, TemplateInfo, TensorManifest, TensorOptions,
-    body_input_maps, write_tensors,
-};
+pub use tensors::{TensorOptions, body_input_maps, write_tensors};
