@@ -21,9 +21,12 @@ pub const OUTPUT_CHANNELS: usize = 3;
 /// Width of the sinusoidal timestep features (Sana's and DiT's 256).
 pub const FREQUENCY_DIM: usize = 256;
 
-/// How the Mix-FFN's 3 x 3 depthwise convolution is computed (same function, two speeds; the
-/// brief warned that burn's grouped `Conv2d` backward runs one small convolution per channel
-/// on the CPU, but at these sizes it measured faster than the shifted form).
+/// How the Mix-FFN's 3 x 3 depthwise convolution is computed in training, where gradients
+/// flow (same function, two speeds; the brief warned that burn's grouped `Conv2d` backward
+/// runs one small convolution per channel on the CPU, but at these sizes it measured faster
+/// than the shifted form). Sampling ignores it: without gradients the Mix-FFN's middle always
+/// runs as one vectorized kernel (`MixFfn::sampling_middle`, docs/SURROGATE.md "A faster
+/// network call"), tested equal to both forms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Depthwise {
