@@ -153,23 +153,6 @@ pub struct RecordOptions<'a> {
     pub deadline: Option<Instant>,
 }
 
-/// What the surrogate predicts of a prepared scene: the bodies the engine would simulate
-/// (the blend-in included, the frame count the configuration asks), as plain data.
-pub fn scene_input<'a>(p: &'a Prepared, software: &str) -> surrogate::predict::SceneInput<'a> {
-    let scene = &p.scene;
-    let frames = scene.num_frames();
-    let mut motion = scene.body_motion();
-    motion.frames.truncate(frames);
-    surrogate::predict::SceneInput {
-        body_model: &p.model,
-        garment: &p.garment,
-        motion,
-        betas: (0..frames).map(|k| scene.frame_betas(k)).collect(),
-        material: scene.config.material,
-        meta: scene.sequence_meta(&p.garment.name, p.model.name(), software),
-    }
-}
-
 /// Runs a prepared scene into `out` (atomically), with a progress bar and OBJ frames as
 /// `options` ask.
 pub fn record(p: &Prepared, out: &Path, options: RecordOptions) -> Result<RunSummary> {

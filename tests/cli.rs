@@ -456,7 +456,7 @@ fn bad_input_fails_with_a_clear_message_and_no_output() {
     );
 }
 
-/// The recording opens in the public Python `mcap` package (tools/read_recording.py). Skipped
+/// The recording opens in the public Python `mcap` package (tests/readers/read_recording.py). Skipped
 /// with a message where python3 with `mcap` and `numpy` is not installed (.ci/run installs
 /// them).
 #[test]

@@ -22,7 +22,7 @@ use render::recording::{
 use surrogate::predict::{SceneRequest, predict_scene};
 
 use crate::run::{RecordOptions, prepare, print_config, record, resolve_config, summary_json};
-use crate::run::{frames_bar, gif_progress, scene_input};
+use crate::run::{frames_bar, gif_progress};
 
 /// The demo's garment: a library design the shipped model was not trained on (held out in
 /// specs/shipped.toml), of a family it was trained on (t-shirts), so the demo shows the
@@ -133,9 +133,11 @@ fn predict_and_compare(
         body_vertices: false,
     };
     let bar = frames_bar("predicting", prepared.scene.num_frames(), false);
-    let p = predict_scene(&scene_input(prepared, &software), &request, &mut || {
-        bar.inc(1)
-    })?;
+    let p = predict_scene(
+        &surrogate::predict::SceneInput::of_scene(prepared, &software),
+        &request,
+        &mut || bar.inc(1),
+    )?;
     bar.finish_and_clear();
     let truth = out.join("sequence.mcap");
     let scores = sim::metrics::compare_recordings(&truth, &path, &prepared.model, 0)?;

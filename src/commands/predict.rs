@@ -12,10 +12,10 @@ use surrogate::run::TrainedModel;
 
 use crate::cli::PredictArgs;
 use files::write_json;
-use surrogate::predict::{SceneRequest, predict_scene};
+use surrogate::predict::{SceneInput, SceneRequest, predict_scene};
 
 use crate::run::frames_bar;
-use crate::run::{prepare, resolve_inputs, scene_input, set_threads};
+use crate::run::{prepare, resolve_inputs, set_threads};
 
 pub fn run(args: &PredictArgs) -> Result<()> {
     let started = Instant::now();
@@ -53,9 +53,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         body_vertices: args.body_vertices,
     };
     let bar = frames_bar("predicting", prepared.scene.num_frames(), args.quiet);
-    let p = predict_scene(&scene_input(&prepared, &software), &request, &mut || {
-        bar.inc(1)
-    })?;
+    let p = predict_scene(
+        &SceneInput::of_scene(&prepared, &software),
+        &request,
+        &mut || bar.inc(1),
+    )?;
     bar.finish_and_clear();
     let (garment, scene, stats) = (&prepared.garment, &prepared.scene, &p.stats);
     let (frames, frames_per_s, seen) = (p.frames, p.frames_per_s, p.seen);

@@ -98,10 +98,10 @@ pub fn python_has(test: &str, modules: &str) -> bool {
     )
 }
 
-/// Runs one of `tools/*.py` on `arg`, asserts success and parses the JSON it prints.
+/// Runs one of the independent format readers (`tests/readers/*.py`, public packages only) on `arg`, asserts success and parses the JSON it prints.
 pub fn python_tool(script: &str, arg: &Path) -> Value {
     let script = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tools")
+        .join("tests/readers")
         .join(script);
     let out = Command::new("python3")
         .arg(script)

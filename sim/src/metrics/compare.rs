@@ -35,6 +35,19 @@ pub fn compare_recordings(
 ) -> Result<Compared> {
     let a = Recording::read(a_path)?;
     let b = Recording::read(b_path)?;
+    compare(&a, a_path, &b, b_path, model, seed)
+}
+
+/// [`compare_recordings`] of two recordings already read (the Python package's `metrics`);
+/// `a_path` and `b_path` name them in errors.
+pub fn compare(
+    a: &Recording,
+    a_path: &Path,
+    b: &Recording,
+    b_path: &Path,
+    model: &BodyModel,
+    seed: u64,
+) -> Result<Compared> {
     let refuse = |message: String| Error::Recording {
         path: b_path.display().to_string(),
         message,
@@ -81,8 +94,8 @@ pub fn compare_recordings(
         mean,
         per_frame,
         frames,
-        jitter_a: jitter(&all(&a)),
-        jitter_b: jitter(&all(&b)),
+        jitter_a: jitter(&all(a)),
+        jitter_b: jitter(&all(b)),
     })
 }
 

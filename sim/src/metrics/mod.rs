@@ -22,7 +22,7 @@ pub const FRAME_STRIDE: usize = 5;
 type P3 = [f64; 3];
 
 mod compare;
-pub use compare::{Compared, compare_recordings};
+pub use compare::{Compared, compare, compare_recordings};
 type Tree = ImmutableKdTree<f64, u32, 3, 32>;
 
 fn sub(a: P3, b: P3) -> P3 {

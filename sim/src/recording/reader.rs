@@ -15,6 +15,9 @@ use crate::error::{Error, Result};
 pub struct Recording {
     /// Sequence metadata.
     pub meta: Option<SequenceMeta>,
+    /// The metadata message as written, with any keys a writer added beside the sequence's
+    /// (a prediction's `predicted`: model and sampler settings).
+    pub meta_json: Option<serde_json::Value>,
     /// The template.
     pub template: TemplateArrays,
     /// Garment vertices per frame, m.
@@ -134,7 +137,11 @@ impl Recording {
             let json = |what: &str| fail(format!("bad {what} message on {topic}"));
             match topic {
                 META_TOPIC => {
-                    r.meta = Some(serde_json::from_slice(data).map_err(|_| json("metadata"))?)
+                    let value: serde_json::Value =
+                        serde_json::from_slice(data).map_err(|_| json("metadata"))?;
+                    r.meta =
+                        Some(serde_json::from_value(value.clone()).map_err(|_| json("metadata"))?);
+                    r.meta_json = Some(value);
                 }
                 TEMPLATE_POSITIONS_TOPIC => {
                     r.template.positions =

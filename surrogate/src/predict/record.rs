@@ -13,7 +13,7 @@ use sim::recording::{Channels, FrameRecord, SequenceMeta, SequenceWriter, Templa
 use sim::scene::FPS;
 
 use super::{BodySequence, Predictor, PreparedGarment, Settings, Timing};
-use crate::error::{Error, Result, file_error};
+use crate::error::{Error, Result};
 use crate::run::TrainedModel;
 
 /// The recording's metadata: a garment sequence's, plus what made the prediction.
@@ -193,6 +193,26 @@ pub struct SceneInput<'a> {
     pub meta: SequenceMeta,
 }
 
+impl<'a> SceneInput<'a> {
+    /// What the engine would simulate of a prepared scene: its bodies (the blend-in included,
+    /// the frame count the configuration asks), shape, material and metadata, as plain data
+    /// (the command line's and the Python package's `predict`); `software` names the writer.
+    pub fn of_scene(p: &'a sim::run::Prepared, software: &str) -> Self {
+        let scene = &p.scene;
+        let frames = scene.num_frames();
+        let mut motion = scene.body_motion();
+        motion.frames.truncate(frames);
+        Self {
+            body_model: &p.model,
+            garment: &p.garment,
+            motion,
+            betas: (0..frames).map(|k| scene.frame_betas(k)).collect(),
+            material: scene.config.material,
+            meta: scene.sequence_meta(&p.garment.name, p.model.name(), software),
+        }
+    }
+}
+
 /// Predicts every frame of a scene and records it; `tick` is called after each frame.
 pub fn predict_scene(
     input: &SceneInput,
@@ -237,7 +257,7 @@ pub fn predict_scene(
         obj: r.obj_dir.map(|d| (d, garment)),
         tick,
     };
-    let stats = record_prediction(r.out, recorded).map_err(|e| file_error(r.out, e))?;
+    let stats = record_prediction(r.out, recorded)?;
     let mean = |f: fn(&(f64, f64)) -> f64| -> f64 {
         stats.collision.iter().map(f).sum::<f64>() / stats.collision.len().max(1) as f64
     };

@@ -1,7 +1,10 @@
 """Reads a `dit-garment dataset tensors` folder with the public safetensors and numpy packages
 and prints the shapes of every split's first shard and of the templates as JSON.
 
-    python3 tools/read_tensors.py T
+    python3 tests/readers/read_tensors.py T
+
+An independent check of the format for the tests (public packages only); users read tensors
+with the Python package (`dit_garment.TensorShards`, python/examples/read_tensors.py).
 """
 
 import json

@@ -1,7 +1,10 @@
 """Reads a dit-garment recording with the public `mcap` package (pip install mcap numpy) and
 prints what it holds; exits non-zero if the file is not a complete garment recording.
 
-usage: python3 tools/read_recording.py seq.mcap
+usage: python3 tests/readers/read_recording.py seq.mcap
+
+An independent check of the format for the tests (the public `mcap` package only); users read
+recordings with the Python package (`dit_garment.read_recording`, python/examples).
 """
 import json
 import sys
