@@ -1,6 +1,6 @@
 """Poses a garment through a motion with the shipped surrogate, simulates the same scene with
-the engine, and scores the prediction against it; also against linear blend skinning of the
-template (the baseline the surrogate must beat) and writes both recordings.
+the engine, scores the prediction against it with the paper's metrics and writes both
+recordings.
 
     python predict_and_score.py [GARMENT] [MOTION]
 """

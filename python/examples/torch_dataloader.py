@@ -26,7 +26,18 @@ model = torch.nn.Sequential(
     torch.nn.Linear(window * 72 + 3, 256), torch.nn.SiLU(), torch.nn.Linear(256, vertices * 3)
 )
 optimizer = torch.optim.Adam(model.parameters(), lr=1e-3)
-for step, batch in zip(range(20), loader):
+
+def batches(steps):
+    """`steps` batches, over as many epochs as that takes."""
+    while True:
+        for batch in loader:
+            if steps == 0:
+                return
+            steps -= 1
+            yield batch
+
+
+for step, batch in enumerate(batches(40)):
     poses = batch["poses"].flatten(1).float()
     root = batch["translation"][:, -1].float()
     garment = batch["garment"][:, -1].float()
@@ -35,5 +46,5 @@ for step, batch in zip(range(20), loader):
     optimizer.zero_grad()
     loss.backward()
     optimizer.step()
-    if step % 5 == 0:
+    if step % 10 == 0 or step == 39:
         print(f"step {step:3}: loss {loss.item():.6f}")

@@ -159,10 +159,10 @@ impl TensorShards {
 
     fn __repr__(&self) -> String {
         format!(
-            "TensorShards({}, resolution {}, splits {:?})",
+            "TensorShards({}, resolution {}, splits {})",
             self.tensors.dir.display(),
             self.resolution(),
-            self.splits()
+            self.splits().join(", ")
         )
     }
 }
