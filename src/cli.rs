@@ -325,8 +325,8 @@ pub struct RegressArgs {
     /// Only scenarios whose name contains this.
     #[arg(long, default_value = "")]
     pub only: String,
-    /// Regenerate the golden sequences (sim/goldens/) instead of checking them; needs
-    /// --reason, which is recorded in sim/goldens/BLESSED.md.
+    /// Regenerate the golden sequences (regress/goldens/) instead of checking them; needs
+    /// --reason, which is recorded in regress/goldens/BLESSED.md.
     #[arg(long, requires = "reason")]
     pub bless: bool,
     /// Why the goldens are regenerated.

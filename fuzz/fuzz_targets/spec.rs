@@ -8,12 +8,12 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let path = std::path::Path::new("fuzz.toml");
-    if let Ok(spec) = sim::dataset::DatasetSpec::parse(text, path) {
+    if let Ok(spec) = dataset::DatasetSpec::parse(text, path) {
         let motions: Vec<_> = spec
             .motions
             .iter()
             .map(|m| (m.source.clone(), m.split))
             .collect();
-        let _ = sim::dataset::plan(&spec, &motions);
+        let _ = dataset::plan(&spec, &motions);
     }
 });

@@ -4,13 +4,13 @@
 
 use std::path::PathBuf;
 
+use dataset::{DatasetDir, SPLITS};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use sim::dataset::{DatasetDir, SPLITS};
 use surrogate::data::TrainingTensors;
 
-use crate::errors::{sim_error, surrogate_error, value_error};
+use crate::errors::{dataset_error, surrogate_error, value_error};
 use crate::json::to_python;
 
 /// The sequences of `split` that passed their gates, in manifest order: a list of dicts with
@@ -28,7 +28,7 @@ pub fn dataset_sequences<'py>(
         )));
     }
     let dir = DatasetDir::new(&folder);
-    let (_, _, records) = py.detach(|| sim::dataset::load(&dir)).map_err(sim_error)?;
+    let (_, _, records) = py.detach(|| dataset::load(&dir)).map_err(dataset_error)?;
     let out = PyList::empty(py);
     for r in records.iter().filter(|r| r.split == split && r.ok()) {
         let Some(file) = &r.file else { continue };

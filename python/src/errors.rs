@@ -31,15 +31,19 @@ fn motion_kind(e: &motions::Error) -> Kind {
 fn sim_kind(e: &sim::Error) -> Kind {
     use sim::Error as E;
     match e {
-        E::File(_)
-        | E::Recording { .. }
-        | E::Config { .. }
-        | E::Dataset { .. }
-        | E::Spec { .. }
-        | E::Shard(_) => Kind::File,
+        E::File(_) | E::Recording { .. } | E::Config { .. } => Kind::File,
         E::Motion(m) => motion_kind(m),
         E::Factorization { .. } | E::BlowUp { .. } | E::Deadline { .. } => Kind::Numeric,
         _ => Kind::Value,
+    }
+}
+
+fn dataset_kind(e: &dataset::Error) -> Kind {
+    use dataset::Error as E;
+    match e {
+        E::Sim(s) => sim_kind(s),
+        E::Shard(_) => Kind::Value,
+        E::File(_) | E::Dataset { .. } | E::Spec { .. } => Kind::File,
     }
 }
 
@@ -48,6 +52,7 @@ fn surrogate_kind(e: &surrogate::Error) -> Kind {
     match e {
         E::Files(_) | E::File { .. } | E::Config { .. } => Kind::File,
         E::Sim(s) => sim_kind(s),
+        E::Dataset(d) => dataset_kind(d),
         E::Motion(m) => motion_kind(m),
         E::Diverged { .. } => Kind::Numeric,
         E::Sequence { source, .. } => surrogate_kind(source),
@@ -66,6 +71,11 @@ fn exception(kind: Kind, message: String) -> PyErr {
 /// An engine error as its exception.
 pub fn sim_error(e: sim::Error) -> PyErr {
     exception(sim_kind(&e), e.to_string())
+}
+
+/// A dataset error as its exception.
+pub fn dataset_error(e: dataset::Error) -> PyErr {
+    exception(dataset_kind(&e), e.to_string())
 }
 
 /// A surrogate error as its exception.

@@ -151,14 +151,6 @@ pub enum Error {
         /// The frame that was about to be handed out.
         frame: usize,
     },
-    /// A regression scenario's own setup check failed.
-    #[error("scenario '{scenario}': {problem}")]
-    Scenario {
-        /// The scenario.
-        scenario: &'static str,
-        /// What went wrong.
-        problem: String,
-    },
     /// A body model or motion problem (from the `motions` crate).
     #[error(transparent)]
     Motion(#[from] motions::Error),
@@ -175,25 +167,6 @@ pub enum Error {
     #[error("scene configuration {path}: {message}")]
     Config {
         /// The file (or `--config-from` recording).
-        path: String,
-        /// What is wrong (naming the key).
-        message: String,
-    },
-    /// A dataset folder is incomplete.
-    #[error("dataset {path}: {message}")]
-    Dataset {
-        /// The folder.
-        path: String,
-        /// What is missing.
-        message: String,
-    },
-    /// The shard asked for (flag or job-array variables) is malformed or out of range.
-    #[error("{0}")]
-    Shard(String),
-    /// A dataset spec is unreadable or invalid.
-    #[error("dataset spec {path}: {message}")]
-    Spec {
-        /// The file.
         path: String,
         /// What is wrong (naming the key).
         message: String,

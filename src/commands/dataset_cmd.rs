@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use sim::dataset::{DatasetDir, ManifestRecord, load, stats};
+use dataset::{DatasetDir, ManifestRecord, load, stats};
 use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
@@ -120,7 +120,7 @@ fn tensors(
 }
 
 fn verify(root: &Path, json: Option<&Path>) -> Result<()> {
-    let found = sim::dataset::verify(root)?;
+    let found = dataset::verify(root)?;
     say!("verify {}: {found}", root.display());
     if let Some(path) = json {
         write_json(path, &found)?;
@@ -158,7 +158,7 @@ fn stats_cmd(root: &Path, json: Option<&Path>) -> Result<()> {
 }
 
 fn merge(out: &Path, roots: &[std::path::PathBuf]) -> Result<()> {
-    let merged = sim::dataset::merge(out, roots)?;
+    let merged = dataset::merge(out, roots)?;
     say!(
         "merge: {merged} sequences from {} folders into {}",
         roots.len(),

@@ -2,13 +2,13 @@
 //! the final vertices are written in their layout (z-up, grid order) for side-by-side checks.
 
 use anyhow::Result;
-use sim::drape_bench::DrapeBench;
+use regress::drape_bench::DrapeBench;
 
 use crate::cli::DrapeBenchArgs;
 use files::write_json;
 
 pub fn run(args: &DrapeBenchArgs) -> Result<()> {
-    let max = sim::drape_bench::MAX_GRID_N;
+    let max = regress::drape_bench::MAX_GRID_N;
     anyhow::ensure!(
         (2..=max).contains(&args.n),
         "--n {}: must be 2 to {max} vertices per side",

@@ -6,8 +6,8 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use dataset::{DatasetDir, ManifestRecord};
 use serde_json::{Value, json};
-use sim::dataset::{DatasetDir, ManifestRecord};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
 use surrogate::evaluate::tables::{

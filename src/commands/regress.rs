@@ -2,8 +2,8 @@
 //! a scenario fails.
 
 use anyhow::{Result, bail};
+use regress::run as run_suite;
 use serde_json::json;
-use sim::regress::run as run_suite;
 
 use crate::cli::RegressArgs;
 use files::write_json;
@@ -14,14 +14,14 @@ pub fn run(args: &RegressArgs) -> Result<()> {
         if reason.trim().is_empty() {
             bail!("--bless needs a non-empty --reason");
         }
-        for path in sim::regress::bless(reason)? {
+        for path in regress::bless(reason)? {
             say!("blessed {}", path.display());
         }
         return Ok(());
     }
     let outcomes = run_suite(args.long, &args.only)?;
     if outcomes.is_empty() {
-        let named = sim::regress::scenarios()
+        let named = regress::scenarios()
             .iter()
             .any(|s| s.name.contains(&args.only));
         if named && !args.long {

@@ -11,10 +11,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use dataset::{DatasetDir, ManifestRecord};
 use rayon::prelude::*;
 use serde_json::json;
 use sim::SceneConfig;
-use sim::dataset::{DatasetDir, ManifestRecord};
 use sim::recording::Recording;
 use sim::run::Prepared;
 use surrogate::data::Sequence;

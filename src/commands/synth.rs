@@ -2,7 +2,7 @@
 //! by Slurm job arrays or Kubernetes indexed jobs.
 //!
 //! One sequence's run (retries, gates), the folder's layout and its checks are
-//! `sim::dataset`'s; this command picks the shard's sequences, runs them in parallel with a
+//! `dataset`'s; this command picks the shard's sequences, runs them in parallel with a
 //! progress bar and prints. Every file is written to a temporary name and renamed, so a killed
 //! run leaves only whole files; a re-run skips sequences whose record exists and whose
 //! recording matches the record's checksum.
@@ -13,12 +13,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use rayon::prelude::*;
-use serde_json::json;
-use sim::dataset::{
+use dataset::{
     DatasetDir, DatasetSpec, ManifestRecord, Shard, Synthesis, expand_motions, make_templates,
     plan, split_finished,
 };
+use rayon::prelude::*;
+use serde_json::json;
 
 use crate::cli::SynthArgs;
 use crate::run::progress;

@@ -144,6 +144,9 @@ pub enum Error {
     /// An engine error (recordings, metrics).
     #[error(transparent)]
     Sim(#[from] sim::Error),
+    /// A dataset problem (from the `dataset` crate).
+    #[error(transparent)]
+    Dataset(#[from] dataset::Error),
     /// A body model or motion error.
     #[error(transparent)]
     Motion(#[from] motions::Error),

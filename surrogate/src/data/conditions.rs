@@ -15,11 +15,11 @@
 //! the velocities share one scale, and the other blocks are z-scored with a floor under each
 //! std.
 
+use dataset::MaterialRanges;
 use motions::Motion;
 use motions::rotation::axis_angle_to_matrix;
 use serde::{Deserialize, Serialize};
 use sim::Material;
-use sim::dataset::MaterialRanges;
 
 use super::stats::Stats;
 use crate::error::Result;

@@ -3,8 +3,8 @@
 
 use std::collections::BTreeMap;
 
+use dataset::MaterialRanges;
 use serde::{Deserialize, Serialize};
-use sim::dataset::MaterialRanges;
 
 use super::conditions::{Block, ConditionLayout, ConditionScaling};
 use super::stats::Stats;

@@ -9,11 +9,11 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
 use motions::BodyModel;
 use rayon::prelude::*;
 use safetensors::tensor::{Dtype, TensorView};
 use serde::{Deserialize, Serialize};
-use sim::dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
 use sim::obstacles::MeshSurface;
 use sim::recording::{Recording, TemplateArrays};
 

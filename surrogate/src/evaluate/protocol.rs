@@ -8,10 +8,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
+use dataset::ManifestRecord;
 use motions::BodyModel;
 use rayon::prelude::*;
 use serde_json::{Value, json};
-use sim::dataset::ManifestRecord;
 
 use super::baselines::{self, Baseline, FloorMaps};
 use super::tables::{Rows, SequenceResult, aggregate_by, family_of, paper_numbers};

@@ -372,14 +372,14 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     Ok(summary)
 }
 
-/// `preferred` when it has frames, else the first held-out split (in `sim::dataset::SPLITS`
+/// `preferred` when it has frames, else the first held-out split (in `dataset::SPLITS`
 /// order) that has: small datasets often leave the main test split empty.
 fn held_out_split(tensors: &TrainingTensors, preferred: &str) -> Option<String> {
     let frames = |s: &str| tensors.manifest.splits.get(s).map_or(0, |i| i.frames);
     if frames(preferred) > 0 {
         return Some(preferred.to_string());
     }
-    sim::dataset::SPLITS
+    dataset::SPLITS
         .iter()
         .filter(|s| **s != "train")
         .find(|s| frames(s) > 0)

@@ -2,12 +2,12 @@
 //! energy conservation, determinism.
 
 use super::{G, Outcome, advance};
-use crate::cloth::{ClothMesh, ClothState, Vec3};
-use crate::constraints::{BendingRest, Seam};
 use crate::error::Result;
-use crate::obstacles::{Obstacles, Plane, Sphere};
-use crate::params::{Material, SolverParams};
-use crate::solver::{ClothSetup, Solver};
+use sim::constraints::{BendingRest, Seam};
+use sim::obstacles::{Obstacles, Plane, Sphere};
+use sim::{ClothMesh, ClothState, Vec3};
+use sim::{ClothSetup, Solver};
+use sim::{Material, SolverParams};
 
 /// Free fall: exact discrete backward-Euler formula, relative error.
 pub(super) fn free_fall(_long: bool) -> Result<Vec<Outcome>> {

@@ -1,6 +1,7 @@
-//! The physics regression suite: PHYSICS.md's closed forms as named scenarios, each reporting
-//! expected, measured, tolerance and pass. `cargo test` runs the fast versions
-//! (sim/tests/regression.rs); `dit-garment regress [--long]` prints them all.
+//! The physics regression suite, the engine's first outside client: PHYSICS.md's closed forms
+//! as named scenarios, each reporting expected, measured, tolerance and pass, the golden
+//! sequences and the drape bench (the peers' scene). `cargo test` runs the fast versions
+//! (regress/tests/regression.rs); `dit-garment regress [--long]` prints them all.
 //!
 //! Scenario groups, one file each: `dynamics.rs` (free fall, momentum, energy, determinism),
 //! `friction.rs` (incline, Ly et al.'s drop, accelerating plate), `statics.rs` (hanging chain
@@ -10,21 +11,22 @@
 use serde::Serialize;
 
 mod contact;
+pub mod drape_bench;
 mod dynamics;
+mod error;
 mod friction;
 mod goldens;
 pub mod self_contact;
 mod statics;
 
+pub use error::{Error, Result};
 pub use goldens::{
     GOLDEN_TOLERANCE_CM, GOLDENS, Golden, bless, golden_dir, golden_distance, golden_scene,
     simulate_golden,
 };
 
-use crate::cloth::{ClothState, Vec3};
-use crate::error::Result;
-use crate::obstacles::Obstacles;
-use crate::solver::Solver;
+use sim::obstacles::Obstacles;
+use sim::{ClothState, Solver, Vec3};
 
 pub(crate) const G: f64 = 9.81;
 

@@ -2,11 +2,11 @@
 //! plane, a patch on an accelerating plate.
 
 use super::{G, Outcome, advance, mean};
-use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::error::Result;
-use crate::obstacles::{Obstacles, Plane};
-use crate::params::{Material, SolverParams};
-use crate::solver::{ClothSetup, Solver};
+use sim::obstacles::{Obstacles, Plane};
+use sim::{ClothMesh, ClothState, Vec3};
+use sim::{ClothSetup, Solver};
+use sim::{Material, SolverParams};
 
 /// Solver, state, obstacles, downhill direction and plane normal of an incline scene.
 type Incline = (Solver, ClothState, Obstacles, Vec3, Vec3);

@@ -5,9 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use super::plan::PlannedSequence;
 use super::spec::GateSpec;
-use crate::SolverParams;
-use crate::params::Material;
-use crate::scene::RunSummary;
+use sim::Material;
+use sim::SolverParams;
+use sim::scene::RunSummary;
 
 /// Gate results of one attempt.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -10,8 +10,8 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::spec::{DatasetSpec, MAX_PLANNED_SEQUENCES, MaterialRanges, Tag};
-use crate::params::Material;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
+use sim::Material;
 
 /// One sequence to simulate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -347,7 +347,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dataset::spec::{GarmentEntry, MotionEntry, SplitSpec};
+    use crate::spec::{GarmentEntry, MotionEntry, SplitSpec};
 
     fn spec() -> DatasetSpec {
         let g = |name: &str, split| GarmentEntry {

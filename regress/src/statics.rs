@@ -2,11 +2,11 @@
 //! cantilever test of bending stiffness.
 
 use super::{G, Outcome, advance, mean};
-use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::error::Result;
-use crate::obstacles::Obstacles;
-use crate::params::{Material, SolverParams};
-use crate::solver::{ClothSetup, Solver};
+use sim::obstacles::Obstacles;
+use sim::{ClothMesh, ClothState, Vec3};
+use sim::{ClothSetup, Solver};
+use sim::{Material, SolverParams};
 
 /// Hanging chain of N equal masses (small stiff triangles) joined by springs of stiffness k:
 /// at equilibrium spring j from the bottom stretches exactly m g j / k.
@@ -37,7 +37,7 @@ pub(super) fn hanging_chain(_long: bool) -> Result<Vec<Outcome>> {
     );
     setup.pins = vec![0, 1, 2];
     setup.springs = (0..links as u32)
-        .map(|i| crate::constraints::Spring {
+        .map(|i| sim::constraints::Spring {
             a: 3 * i + 1,
             b: 3 * (i + 1),
             rest_length: gap,

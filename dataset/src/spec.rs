@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A dataset: the garments and motions with their split tags, how many shapes and draws, the
 /// material ranges, solver settings, quality gates and the one-factor test sets.
@@ -152,14 +152,14 @@ pub struct SolverSpec {
 
 impl Default for SolverSpec {
     fn default() -> Self {
-        let plain = crate::SolverParams::default();
+        let plain = sim::SolverParams::default();
         Self {
             substeps: 4,
             max_iterations: 16,
             self_contact: true,
             self_contact_distance: plain.self_contact_distance,
             self_friction: plain.self_friction,
-            acceleration: crate::config::garment_solver().acceleration,
+            acceleration: sim::config::garment_solver().acceleration,
             max_penetration_jump: plain.max_penetration_jump,
         }
     }
@@ -194,7 +194,7 @@ impl Default for GateSpec {
             max_penetration_m: 0.02,
             max_inside_fraction: 0.05,
             max_edge_stretch: 1.5,
-            max_self_intersections: crate::sewing::MAX_SELF_INTERSECTIONS,
+            max_self_intersections: sim::sewing::MAX_SELF_INTERSECTIONS,
             timeout_s: 900.0,
             retries: 1,
             retry_substeps: 8,
@@ -333,20 +333,20 @@ impl DatasetSpec {
                 return Err(format!("{key} = {n} is outside 1..={MAX_DRAWS}"));
             }
         }
-        if let Some(n) = s.frames.filter(|&n| n > crate::config::MAX_FRAMES) {
+        if let Some(n) = s.frames.filter(|&n| n > sim::config::MAX_FRAMES) {
             return Err(format!(
                 "sequence.frames = {n} is more than {}",
-                crate::config::MAX_FRAMES
+                sim::config::MAX_FRAMES
             ));
         }
         for (key, n) in [
             ("sequence.blend_frames", s.blend_frames),
             ("sequence.settle_frames", s.settle_frames),
         ] {
-            if n > crate::config::MAX_PREFIX_FRAMES {
+            if n > sim::config::MAX_PREFIX_FRAMES {
                 return Err(format!(
                     "{key} = {n} is more than {} (an hour at 30 fps)",
-                    crate::config::MAX_PREFIX_FRAMES
+                    sim::config::MAX_PREFIX_FRAMES
                 ));
             }
         }

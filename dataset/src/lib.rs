@@ -1,4 +1,4 @@
-//! Dataset synthesis, the engine's main job: a TOML spec of garments, motions, shapes and
+//! Dataset synthesis, the engine's main job, as a crate of its own over the engine's public API: a TOML spec of garments, motions, shapes and
 //! materials becomes a reproducible list of sequences (stable ids and seeds, training and test
 //! splits), each judged by quality gates and recorded in a JSON Lines manifest.
 //!
@@ -8,6 +8,7 @@
 //! sequences a process runs (shards) and in how many threads is the command line's part.
 
 mod dir;
+mod error;
 mod manifest;
 mod merge;
 mod plan;
@@ -18,6 +19,7 @@ mod synth;
 mod verify;
 
 pub use dir::{DatasetDir, finished_record, split_finished};
+pub use error::{Error, Result};
 pub use manifest::{Attempt, GateResult, ManifestRecord, RecordPathError};
 pub use merge::merge;
 pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};

@@ -15,10 +15,11 @@ use rayon::prelude::*;
 use super::{
     Attempt, DatasetDir, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, finished_record,
 };
-use crate::error::{BlowUpCause, Error, Result};
-use crate::run::Prepared;
-use crate::scene::BodyAttachment;
-use crate::{SceneConfig, SolverParams};
+use crate::error::{Error, Result};
+use sim::BlowUpCause;
+use sim::run::Prepared;
+use sim::scene::BodyAttachment;
+use sim::{SceneConfig, SolverParams};
 
 /// A garment template with its body attachments, shared by every sequence that uses it.
 pub type Template = (Arc<garments::Garment>, Vec<BodyAttachment>);
@@ -39,10 +40,10 @@ pub fn make_templates(
     let made = names
         .par_iter()
         .map(
-            |&name| match crate::sources::garment(name, model, cache, |path| making(name, path)) {
+            |&name| match sim::sources::garment(name, model, cache, |path| making(name, path)) {
                 Ok((garment, attachments)) => Ok((name, Ok((Arc::new(garment), attachments)))),
-                Err(e @ Error::TemplateGates { .. }) => Ok((name, Err(e.to_string()))),
-                Err(e) => Err(e),
+                Err(e @ sim::Error::TemplateGates { .. }) => Ok((name, Err(e.to_string()))),
+                Err(e) => Err(Error::from(e)),
             },
         )
         .collect::<Result<Vec<_>>>()?;
@@ -106,7 +107,7 @@ impl Synthesis<'_> {
         let (garment, attachments) =
             self.templates
                 .get(&p.garment)
-                .ok_or_else(|| Error::Garment {
+                .ok_or_else(|| sim::Error::Garment {
                     garment: p.garment.clone(),
                     problem: format!(
                         "sequence {} names a garment the run has no template of",
@@ -143,7 +144,7 @@ impl Synthesis<'_> {
                     let deadline = attempt_started + Duration::from_secs_f64(spec.gates.timeout_s);
                     match prepared.record_file(&path, &self.software, Some(deadline), |_| Ok(())) {
                         Ok(summary) => GateResult::judge(&summary, &spec.gates),
-                        Err(Error::Deadline { .. }) => GateResult::unfinished(
+                        Err(sim::Error::Deadline { .. }) => GateResult::unfinished(
                             format!("time-out after {} s", spec.gates.timeout_s),
                             true,
                             true,
@@ -151,7 +152,7 @@ impl Synthesis<'_> {
                         Err(e) => {
                             let finite = !matches!(
                                 e,
-                                Error::BlowUp {
+                                sim::Error::BlowUp {
                                     reason: BlowUpCause::NonFinite,
                                     ..
                                 }
@@ -232,7 +233,7 @@ impl Synthesis<'_> {
                 max_penetration_jump: solver.max_penetration_jump,
                 ..SolverParams::default()
             },
-            record: crate::config::RecordConfig::default(),
+            record: sim::config::RecordConfig::default(),
         }
     }
 }
@@ -315,7 +316,7 @@ impl DatasetDir {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dataset::{expand_motions, plan};
+    use crate::{expand_motions, plan};
 
     const SPEC: &str = r#"
 name = "synth-unit"
@@ -344,7 +345,16 @@ split = "train"
     /// A coarse skirt template (24 x 8) on the default body.
     fn run<'a>(spec: &'a DatasetSpec, dir: &'a DatasetDir) -> Synthesis<'a> {
         let model = BodyModel::default_body();
-        let (garment, attachments) = crate::run::tests::coarse_skirt(&model);
+        let (garment, attachments) = sim::scene::builtin_template(
+            &model,
+            "skirt",
+            &garments::SkirtParams {
+                columns: 24,
+                rings: 8,
+                ..garments::SkirtParams::default()
+            },
+        )
+        .unwrap();
         Synthesis {
             spec,
             dir,

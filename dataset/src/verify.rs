@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::{DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence};
 use crate::error::{Error, Result};
-use crate::recording::Recording;
+use sim::recording::Recording;
 
 /// What verifying a dataset found.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -221,7 +221,7 @@ fn check_record(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dataset::{expand_motions, finished_record, plan};
+    use crate::{expand_motions, finished_record, plan};
 
     /// A record of `p` that failed without a recording.
     fn failed(p: &PlannedSequence) -> ManifestRecord {
@@ -235,7 +235,7 @@ mod tests {
     fn a_dataset_folder_is_checked_against_its_plan_manifest_and_files() {
         let root = tempfile::tempdir().unwrap();
         let dir = DatasetDir::new(root.path());
-        let text = include_str!("../../../specs/tiny.toml");
+        let text = include_str!("../../specs/tiny.toml");
         std::fs::write(dir.spec(), text).unwrap();
         let spec = DatasetSpec::parse(text, &dir.spec()).unwrap();
         let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
@@ -275,7 +275,7 @@ mod tests {
     fn a_record_counts_as_finished_only_with_its_recording_intact() {
         let root = tempfile::tempdir().unwrap();
         let dir = DatasetDir::new(root.path());
-        let text = include_str!("../../../specs/tiny.toml");
+        let text = include_str!("../../specs/tiny.toml");
         let spec = DatasetSpec::parse(text, &dir.spec()).unwrap();
         let p = &plan(&spec, &expand_motions(&spec).unwrap()).unwrap()[0];
         assert!(finished_record(&dir, &p.id).is_none(), "no record yet");

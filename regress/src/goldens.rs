@@ -1,17 +1,17 @@
 //! The golden sequences: short garment-on-moving-body recordings checked in under
-//! `sim/goldens/`, re-simulated and compared with the metrics; `bless` regenerates them.
+//! `regress/goldens/`, re-simulated and compared with the metrics; `bless` regenerates them.
 
 use super::Outcome;
-use crate::config::SceneConfig;
 use crate::error::{Error, Result};
-use crate::params::{Material, SolverParams};
-use crate::recording::{Channels, SequenceWriter, TemplateArrays};
-use crate::scene::{FPS, Scene};
+use sim::SceneConfig;
+use sim::recording::{Channels, SequenceWriter, TemplateArrays};
+use sim::scene::{FPS, Scene};
+use sim::{Material, SolverParams};
 
-/// Golden sequences: short garment-on-moving-body recordings checked in under `sim/goldens/`,
+/// Golden sequences: short garment-on-moving-body recordings checked in under `regress/goldens/`,
 /// re-simulated and compared with the metrics, so any unintended change to the engine fails.
 pub struct Golden {
-    /// File stem under `sim/goldens/`.
+    /// File stem under `regress/goldens/`.
     pub name: &'static str,
     /// Motion (built-in with parameters).
     pub motion: &'static str,
@@ -54,7 +54,7 @@ pub fn golden_scene(
         rings: 16,
         ..garments::SkirtParams::default()
     };
-    let (garment, attachments) = crate::scene::builtin_template(&model, "skirt", &params)?;
+    let (garment, attachments) = sim::scene::builtin_template(&model, "skirt", &params)?;
     let shaped = model.shape(g.betas)?;
     let motion = motions::library::MotionSpec::parse(g.motion)?.generate(&model, &shaped)?;
     let config = SceneConfig {
@@ -95,9 +95,9 @@ pub fn simulate_golden(g: &Golden, stretch_scale: f64) -> Result<Vec<Vec<[f64; 3
 /// Mean E_v (cm) over every 5th frame of `frames` against the golden file, and the frame count.
 pub fn golden_distance(g: &Golden, frames: &[Vec<[f64; 3]>]) -> Result<f64> {
     let path = golden_dir().join(format!("{}.mcap", g.name));
-    let golden = crate::recording::Recording::read(&path)?;
+    let golden = sim::recording::Recording::read(&path)?;
     if golden.garment.len() != frames.len() || golden.template.positions.len() != frames[0].len() {
-        return Err(Error::Recording {
+        return Err(Error::Golden {
             path: path.display().to_string(),
             message: format!(
                 "golden has {} frames of {} vertices, the re-simulation {} of {}",
@@ -109,10 +109,10 @@ pub fn golden_distance(g: &Golden, frames: &[Vec<[f64; 3]>]) -> Result<f64> {
         });
     }
     let scorer =
-        crate::metrics::Scorer::new(&golden.template.positions, &golden.template.triangles, 0)
+        sim::metrics::Scorer::new(&golden.template.positions, &golden.template.triangles, 0)
             .with_samples(2000);
-    let scores: Vec<crate::metrics::Scores> = (0..frames.len())
-        .step_by(crate::metrics::FRAME_STRIDE)
+    let scores: Vec<sim::metrics::Scores> = (0..frames.len())
+        .step_by(sim::metrics::FRAME_STRIDE)
         .map(|k| {
             let gt: Vec<[f64; 3]> = golden.garment[k]
                 .iter()
@@ -121,7 +121,7 @@ pub fn golden_distance(g: &Golden, frames: &[Vec<[f64; 3]>]) -> Result<f64> {
             scorer.frame(&frames[k], &gt, None, k)
         })
         .collect();
-    Ok(crate::metrics::Scores::mean(&scores).E_v)
+    Ok(sim::metrics::Scores::mean(&scores).E_v)
 }
 
 pub(super) fn goldens(_long: bool) -> Result<Vec<Outcome>> {
@@ -141,9 +141,9 @@ pub(super) fn goldens(_long: bool) -> Result<Vec<Outcome>> {
         .collect()
 }
 
-/// Regenerates the golden files and records why in `sim/goldens/BLESSED.md`.
+/// Regenerates the golden files and records why in `regress/goldens/BLESSED.md`.
 pub fn bless(reason: &str) -> Result<Vec<std::path::PathBuf>> {
-    let io = |path: &std::path::Path, e: std::io::Error| Error::Recording {
+    let io = |path: &std::path::Path, e: std::io::Error| Error::Golden {
         path: path.display().to_string(),
         message: e.to_string(),
     };

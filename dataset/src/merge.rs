@@ -99,7 +99,7 @@ fn copy_into(from: &Path, to: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dataset::{expand_motions, plan};
+    use crate::{expand_motions, plan};
 
     const SPEC: &str = r#"
 name = "merge-unit"

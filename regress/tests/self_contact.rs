@@ -1,10 +1,10 @@
-//! Cloth-cloth contact (the scenes of `sim::regress::self_contact`): layers dropped on each
+//! Cloth-cloth contact (the scenes of `regress::self_contact`): layers dropped on each
 //! other keep the self-contact distance, a sheet folded over itself on the ground does not
 //! pass through, and friction between layers follows Coulomb's law. The first two scenes are
 //! also run with self-contact off, to show the checks can fail.
 
+use regress::self_contact::{LAYER_FRICTION, folded_strip, patch_on_tilted_sheet, two_sheets};
 use sim::SolverParams;
-use sim::regress::self_contact::{LAYER_FRICTION, folded_strip, patch_on_tilted_sheet, two_sheets};
 
 #[test]
 fn two_sheets_dropped_on_each_other_stay_the_contact_distance_apart() {

@@ -9,12 +9,12 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::cloth::{ClothMesh, ClothState, Vec3};
-use crate::constraints::bending::RIGIDITY_PER_KB;
 use crate::error::{Error, Result};
-use crate::obstacles::{Obstacles, Sphere};
-use crate::params::{Material, SolverParams};
-use crate::solver::{ClothSetup, Solver, StageTimes};
+use sim::constraints::bending::RIGIDITY_PER_KB;
+use sim::obstacles::{Obstacles, Sphere};
+use sim::{ClothMesh, ClothState, Vec3};
+use sim::{ClothSetup, Solver, StageTimes};
+use sim::{Material, SolverParams};
 
 /// Scene constants (peers' `scene_metrics.py`).
 pub const SPHERE_CENTER_HEIGHT: f64 = 0.5;

@@ -2,14 +2,14 @@
 //! iterations, and light cloth staying out of a swinging arm (`--long`).
 
 use super::Outcome;
-use crate::cloth::{ClothMesh, ClothState, Vec3};
-use crate::config::SceneConfig;
 use crate::drape_bench::DrapeBench;
 use crate::error::Result;
-use crate::obstacles::{Obstacles, Sphere};
-use crate::params::{Material, SolverParams};
-use crate::scene::Scene;
-use crate::solver::{ClothSetup, Solver};
+use sim::SceneConfig;
+use sim::obstacles::{Obstacles, Sphere};
+use sim::scene::Scene;
+use sim::{ClothMesh, ClothState, Vec3};
+use sim::{ClothSetup, Solver};
+use sim::{Material, SolverParams};
 
 /// Sphere drape: no vertex inside the sphere (the drape bench at 32 x 32, 64 x 64 with --long).
 pub(super) fn sphere_drape(long: bool) -> Result<Vec<Outcome>> {
@@ -91,14 +91,14 @@ pub(super) fn soft_cloth(long: bool) -> Result<Vec<Outcome>> {
         0.6923110901957812,
     ];
     let model = motions::BodyModel::default_body();
-    let (garment, attachments) = crate::sources::garment(
+    let (garment, attachments) = sim::sources::garment(
         "dress_longsleeve_midi",
         &model,
-        &crate::templates::cache_dir(),
+        &sim::templates::cache_dir(),
         |_| {},
     )?;
     let shaped = model.shape(&BETAS)?;
-    let motion = crate::sources::motion("run:speed=1.0,amplitude=0.7", &model, &shaped)?;
+    let motion = sim::sources::motion("run:speed=1.0,amplitude=0.7", &model, &shaped)?;
     let config = SceneConfig {
         garment: "dress_longsleeve_midi".into(),
         motion: motion.name.clone(),
@@ -113,7 +113,7 @@ pub(super) fn soft_cloth(long: bool) -> Result<Vec<Outcome>> {
         },
         solver: SolverParams {
             max_iterations: 32,
-            ..crate::config::garment_solver()
+            ..sim::config::garment_solver()
         },
         ..SceneConfig::default()
     };

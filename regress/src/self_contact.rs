@@ -5,12 +5,12 @@
 //! the tests can show that the checks fail without it.
 
 use super::{G, Outcome};
-use crate::cloth::{ClothMesh, ClothState, Vec3};
 use crate::error::Result;
-use crate::obstacles::{Obstacles, Plane};
-use crate::params::{Material, SolverParams};
-use crate::self_intersection::count_self_intersections;
-use crate::solver::{ClothSetup, Solver};
+use sim::count_self_intersections;
+use sim::obstacles::{Obstacles, Plane};
+use sim::{ClothMesh, ClothState, Vec3};
+use sim::{ClothSetup, Solver};
+use sim::{Material, SolverParams};
 
 const FRAME: f64 = 1.0 / 30.0;
 
@@ -76,7 +76,7 @@ fn combine(meshes: &[(Vec<Vec3>, Vec<[u32; 3]>)]) -> Result<ClothMesh> {
         triangles.extend(t.iter().map(|t| t.map(|i| i + base)));
         positions.extend_from_slice(p);
     }
-    ClothMesh::new(positions, triangles)
+    Ok(ClothMesh::new(positions, triangles)?)
 }
 
 fn params(self_contact: bool) -> SolverParams {

@@ -1,7 +1,7 @@
-//! The fast regression suite: every scenario of `sim::regress` passes within its tolerance
+//! The fast regression suite: every scenario of the `regress` crate passes within its tolerance
 //! (measured vs expected printed on failure).
 
-use sim::regress::run;
+use regress::run;
 
 fn check(filter: &str) {
     let outcomes = run(false, filter).expect("scenario runs");
@@ -68,11 +68,11 @@ fn goldens() {
 /// than the golden tolerance.
 #[test]
 fn goldens_catch_a_perturbed_stretch_stiffness() {
-    let g = &sim::regress::GOLDENS[0];
-    let frames = sim::regress::simulate_golden(g, 1.05).unwrap();
-    let d = sim::regress::golden_distance(g, &frames).unwrap();
+    let g = &regress::GOLDENS[0];
+    let frames = regress::simulate_golden(g, 1.05).unwrap();
+    let d = regress::golden_distance(g, &frames).unwrap();
     assert!(
-        d > sim::regress::GOLDEN_TOLERANCE_CM,
+        d > regress::GOLDEN_TOLERANCE_CM,
         "k_s x 1.05 moved the skirt by only {d} cm"
     );
 }
