@@ -14,6 +14,7 @@ mod merge;
 mod plan;
 mod shard;
 mod spec;
+mod split;
 mod stats;
 mod synth;
 mod verify;
@@ -22,12 +23,13 @@ pub use dir::{DatasetDir, finished_record, split_finished};
 pub use error::{Error, Result};
 pub use manifest::{Attempt, GateResult, ManifestRecord, RecordPathError};
 pub use merge::merge;
-pub use plan::{PlannedSequence, SPLITS, derive_seed, expand_motions, plan};
+pub use plan::{PlannedSequence, derive_seed, expand_motions, plan};
 pub use shard::Shard;
 pub use spec::{
     DatasetSpec, GarmentEntry, GateSpec, MaterialRanges, MotionEntry, SequenceSpec, SolverSpec,
     SplitSpec, Tag,
 };
+pub use split::{Split, Status};
 pub use stats::{Histogram, Stats, stats};
 pub use synth::{Synthesis, Template, make_templates};
 pub use verify::{Verification, load, verify};

@@ -5,7 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use super::plan::PlannedSequence;
 use super::spec::GateSpec;
-use sim::Material;
+use super::split::Status;
+
 use sim::SolverParams;
 use sim::scene::RunSummary;
 
@@ -124,29 +125,17 @@ pub struct Attempt {
 /// One manifest line: everything about a sequence and where it is.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ManifestRecord {
-    /// Stable id.
-    pub id: String,
-    /// Split.
-    pub split: String,
-    /// Garment.
-    pub garment: String,
-    /// Motion source.
-    pub motion: String,
-    /// Shape coefficients.
-    pub betas: Vec<f64>,
-    /// Material, units in the keys.
-    pub material: Material,
-    /// Friction coefficient.
-    pub friction: f64,
-    /// The sequence's seed.
-    pub seed: u64,
+    /// What the plan says of the sequence: id, key, split, garment, motion, shape, material,
+    /// friction and seed (flattened: one manifest line holds them as keys of its own).
+    #[serde(flatten)]
+    pub sequence: PlannedSequence,
     /// Output frames.
     pub frames: usize,
     /// Garment vertices.
     pub vertices: usize,
     /// `ok` (every gate passed) or `failed` (see `reason`; kept for inspection, not for
     /// training).
-    pub status: String,
+    pub status: Status,
     /// Why it failed (the last attempt's failed gates).
     pub reason: Option<String>,
     /// Every attempt, in order.
@@ -166,7 +155,7 @@ pub struct ManifestRecord {
 /// One line of a synthesis log: `id status (frames, wall time): reason`.
 impl std::fmt::Display for ManifestRecord {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        let (id, status, frames, wall) = (&self.id, &self.status, self.frames, self.wall_s);
+        let (id, status, frames, wall) = (&self.sequence.id, self.status, self.frames, self.wall_s);
         write!(f, "{id} {status} ({frames} frames, {wall:.1} s)")?;
         match &self.reason {
             Some(reason) => write!(f, ": {reason}"),
@@ -180,17 +169,10 @@ impl ManifestRecord {
     /// `failed` with no attempts, no recording and no frames yet.
     pub fn of_plan(p: &PlannedSequence, software: &str) -> Self {
         Self {
-            id: p.id.clone(),
-            split: p.split.clone(),
-            garment: p.garment.clone(),
-            motion: p.motion.clone(),
-            betas: p.betas.clone(),
-            material: p.material,
-            friction: p.friction,
-            seed: p.seed,
+            sequence: p.clone(),
             frames: 0,
             vertices: 0,
-            status: "failed".into(),
+            status: Status::Failed,
             reason: None,
             attempts: Vec::new(),
             file: None,
@@ -203,23 +185,27 @@ impl ManifestRecord {
 
     /// Whether the sequence passed its gates.
     pub fn ok(&self) -> bool {
-        self.status == "ok"
+        self.status == Status::Ok
     }
 
-    /// Checks that the id is a plain file name and the recording (if any) is
-    /// `sequences/<id>.mcap`, so a damaged or hostile manifest never points a reader (or a
-    /// merge's copy) outside the dataset folder.
+    /// Checks that the id is a plain file name (not empty, no leading dot, no separator or
+    /// NUL) and the recording (if any) is `sequences/<id>.mcap`, so a damaged or hostile
+    /// manifest never points a reader (or a merge's copy, or a cache file named by the id)
+    /// outside its folder: the one id check, for synthesis, merge, verify, tensors and
+    /// evaluate.
     pub fn check_paths(&self) -> std::result::Result<(), RecordPathError> {
-        let id = &self.id;
-        let plain = !id.is_empty() && id != "." && id != ".." && !id.contains(['/', '\\', '\0']);
+        let id = &self.sequence.id;
+        let plain = !id.is_empty() && !id.starts_with('.') && !id.contains(['/', '\\', '\0']);
         if !plain {
             return Err(RecordPathError::Id(id.clone()));
         }
         match &self.file {
-            Some(file) if *file != format!("sequences/{id}.mcap") => Err(RecordPathError::File {
-                id: id.clone(),
-                file: file.clone(),
-            }),
+            Some(file) if *file != super::DatasetDir::sequence_file(id) => {
+                Err(RecordPathError::File {
+                    id: id.clone(),
+                    file: file.clone(),
+                })
+            }
             _ => Ok(()),
         }
     }

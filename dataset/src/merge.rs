@@ -60,11 +60,11 @@ pub fn merge(out: &Path, roots: &[PathBuf]) -> Result<usize> {
         if let Some(file) = &r.file {
             copy_into(&d.root.join(file), &target.root.join(file))?;
         }
-        let template = d.template(&r.garment);
+        let template = d.template(&r.sequence.garment);
         if template.exists() {
-            copy_into(&template, &target.template(&r.garment))?;
+            copy_into(&template, &target.template(&r.sequence.garment))?;
         }
-        copy_into(&d.record(&r.id), &target.record(&r.id))?;
+        copy_into(&d.record(&r.sequence.id), &target.record(&r.sequence.id))?;
         records.push(r);
     }
     files::write_json_lines(&target.manifest(), &records)?;
@@ -156,7 +156,7 @@ split = "train"
         assert_eq!(merge(&out, &[a.clone(), b.clone()]).unwrap(), 2);
         let merged: Vec<ManifestRecord> =
             files::read_json_lines(&DatasetDir::new(&out).manifest(), "manifest").unwrap();
-        let ids: Vec<&str> = merged.iter().map(|r| r.id.as_str()).collect();
+        let ids: Vec<&str> = merged.iter().map(|r| r.sequence.id.as_str()).collect();
         assert_eq!(ids, [planned[0].id.as_str(), planned[1].id.as_str()]);
         // Into one of the shards, and refused for another spec.
         assert_eq!(merge(&a, &[a.clone(), b.clone()]).unwrap(), 2);

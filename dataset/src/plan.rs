@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use super::spec::{DatasetSpec, MAX_PLANNED_SEQUENCES, MaterialRanges, Tag};
+use super::split::Split;
 use crate::error::{Error, Result};
 use sim::Material;
 
@@ -18,10 +19,11 @@ use sim::Material;
 pub struct PlannedSequence {
     /// Stable id (file name stem).
     pub id: String,
-    /// The key its seeds derive from.
+    /// The key its seeds derive from (absent in manifests written before it was recorded).
+    #[serde(default)]
     pub key: String,
-    /// `train`, `test`, `test_garment`, `test_motion`, `test_shape` or `test_material`.
-    pub split: String,
+    /// The split.
+    pub split: Split,
     /// Garment (as named in the spec).
     pub garment: String,
     /// Motion source (built-in with parameters, or AMASS file).
@@ -35,16 +37,6 @@ pub struct PlannedSequence {
     /// The sequence's seed.
     pub seed: u64,
 }
-
-/// The names every split can have, in manifest order.
-pub const SPLITS: [&str; 6] = [
-    "train",
-    "test",
-    "test_garment",
-    "test_motion",
-    "test_shape",
-    "test_material",
-];
 
 /// A 64-bit seed from the dataset seed and a key.
 pub fn derive_seed(dataset_seed: u64, key: &str) -> u64 {
@@ -223,12 +215,12 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
     };
     let test_betas = spec.splits.test_betas_range.unwrap_or(s.betas_range);
     let test_material = spec.splits.test_material_ranges.unwrap_or(spec.material);
-    let sequence = |split: &str, key: String, name: String, garment, motion, b, m| {
+    let sequence = |split: Split, key: String, name: String, garment, motion, b, m| {
         let seed = derive_seed(spec.seed, &key);
         PlannedSequence {
             id: format!("{split}-{name}-{:08x}", seed as u32),
             key,
-            split: split.to_string(),
+            split,
             garment,
             motion,
             betas: b,
@@ -250,7 +242,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
                 let m = material(&mut r, &spec.material);
                 let name = format!("{}-s{shape}d{draw}", slug(motion));
                 out.push(sequence(
-                    "train",
+                    Split::Train,
                     key,
                     name,
                     garment,
@@ -263,9 +255,16 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
     }
     // Test sets: each draws its unseen factors from the held-out tags or ranges.
     let sets = [
-        ("test", spec.splits.test, Tag::Test, Tag::Test, true, true),
         (
-            "test_garment",
+            Split::Test,
+            spec.splits.test,
+            Tag::Test,
+            Tag::Test,
+            true,
+            true,
+        ),
+        (
+            Split::TestGarment,
             spec.splits.test_garment,
             Tag::Test,
             Tag::Train,
@@ -273,7 +272,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             false,
         ),
         (
-            "test_motion",
+            Split::TestMotion,
             spec.splits.test_motion,
             Tag::Train,
             Tag::Test,
@@ -281,7 +280,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             false,
         ),
         (
-            "test_shape",
+            Split::TestShape,
             spec.splits.test_shape,
             Tag::Train,
             Tag::Train,
@@ -289,7 +288,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             false,
         ),
         (
-            "test_material",
+            Split::TestMaterial,
             spec.splits.test_material,
             Tag::Train,
             Tag::Train,
@@ -330,7 +329,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
                 let m = material(&mut r, &test_material);
                 let name = format!("{}-{}-s{shape}", slug(garment), slug(motion));
                 out.push(sequence(
-                    "test_grid",
+                    Split::TestGrid,
                     key,
                     name,
                     garment.clone(),
@@ -409,7 +408,10 @@ mod tests {
             ..Default::default()
         };
         let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
-        let grid: Vec<_> = planned.iter().filter(|p| p.split == "test_grid").collect();
+        let grid: Vec<_> = planned
+            .iter()
+            .filter(|p| p.split == Split::TestGrid)
+            .collect();
         assert_eq!(grid.len(), 2 * 2 * 2);
         for garment in ["c", "d"] {
             for motion in ["kick", "sway"] {
@@ -441,12 +443,15 @@ mod tests {
         let motions = expand_motions(&spec).unwrap();
         let a = plan(&spec, &motions).unwrap();
         assert_eq!(a, plan(&spec, &motions).unwrap(), "same spec, same plan");
-        assert_eq!(a.iter().filter(|p| p.split == "train").count(), 2 * 3 * 3);
+        assert_eq!(
+            a.iter().filter(|p| p.split == Split::Train).count(),
+            2 * 3 * 3
+        );
         assert_eq!(a.len(), 18 + 2 + 1 + 1 + 1 + 1);
         let ids: std::collections::HashSet<_> = a.iter().map(|p| &p.id).collect();
         assert_eq!(ids.len(), a.len(), "ids are unique");
         for p in &a {
-            match p.split.as_str() {
+            match p.split.name() {
                 "train" => assert!(p.garment != "c" && p.motion != "kick"),
                 "test" => assert!(p.garment == "c" && p.motion == "kick"),
                 "test_garment" => assert!(p.garment == "c" && p.motion != "kick"),
@@ -472,7 +477,7 @@ mod tests {
             split: Tag::Train,
         });
         let b = plan(&more, &expand_motions(&more).unwrap()).unwrap();
-        for p in a.iter().filter(|p| p.split == "train") {
+        for p in a.iter().filter(|p| p.split == Split::Train) {
             assert!(b.contains(p), "{} changed", p.id);
         }
     }
@@ -487,13 +492,13 @@ mod tests {
         let planned = plan(&spec, &expand_motions(&spec).unwrap()).unwrap();
         let train: std::collections::BTreeSet<&str> = planned
             .iter()
-            .filter(|p| p.split == "train")
+            .filter(|p| p.split == Split::Train)
             .map(|p| p.garment.as_str())
             .collect();
         assert!(train.iter().any(|g| g.starts_with("a~")), "{train:?}");
         let allowed = ["a", "a~1", "a~2", "a~3", "a~w1", "a~w2", "b"];
         assert!(train.iter().all(|g| allowed.contains(g)), "{train:?}");
-        for p in planned.iter().filter(|p| p.split == "test") {
+        for p in planned.iter().filter(|p| p.split == Split::Test) {
             assert_eq!(p.garment, "c");
         }
     }

@@ -6,7 +6,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::{ManifestRecord, SPLITS};
+use super::{ManifestRecord, Split};
 
 /// Ten equal bins over the values' range (of log10 of the values when `log10`).
 #[derive(Debug, Clone, Serialize)]
@@ -80,14 +80,19 @@ pub struct Stats {
 
 /// The [`Stats`] of `records` at `fps` frames per second.
 pub fn stats(records: &[ManifestRecord], fps: f64) -> Stats {
-    let mut splits: BTreeMap<String, usize> = SPLITS.iter().map(|s| (s.to_string(), 0)).collect();
+    let mut splits: BTreeMap<String, usize> = Split::ALL
+        .iter()
+        .map(|s| (s.name().to_string(), 0))
+        .collect();
     let (mut garments, mut motions, mut failures) =
         (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
     let (mut frames, mut frames_ok) = (0, 0);
     for r in records {
-        *splits.entry(r.split.clone()).or_default() += 1;
-        *garments.entry(r.garment.clone()).or_default() += 1;
-        *motions.entry(r.motion.clone()).or_default() += 1;
+        *splits
+            .entry(r.sequence.split.name().to_string())
+            .or_default() += 1;
+        *garments.entry(r.sequence.garment.clone()).or_default() += 1;
+        *motions.entry(r.sequence.motion.clone()).or_default() += 1;
         frames += r.frames;
         if r.ok() {
             frames_ok += r.frames;
@@ -109,15 +114,15 @@ pub fn stats(records: &[ManifestRecord], fps: f64) -> Stats {
     let material_histograms = BTreeMap::from([
         (
             "k_s_n_per_m",
-            Histogram::of(material(|r| r.material.stretch), false),
+            Histogram::of(material(|r| r.sequence.material.stretch), false),
         ),
         (
             "rho_kg_per_m2",
-            Histogram::of(material(|r| r.material.density), false),
+            Histogram::of(material(|r| r.sequence.material.density), false),
         ),
         (
             "k_b_n_m",
-            Histogram::of(material(|r| r.material.bending), true),
+            Histogram::of(material(|r| r.sequence.material.bending), true),
         ),
     ]);
     let wall: f64 = records.iter().map(|r| r.wall_s).sum();

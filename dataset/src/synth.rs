@@ -16,6 +16,7 @@ use super::{
     Attempt, DatasetDir, DatasetSpec, GateResult, ManifestRecord, PlannedSequence, finished_record,
 };
 use crate::error::{Error, Result};
+use crate::split::Status;
 use sim::BlowUpCause;
 use sim::run::Prepared;
 use sim::scene::BodyAttachment;
@@ -200,7 +201,7 @@ impl Synthesis<'_> {
         ManifestRecord {
             frames,
             vertices,
-            status: if ok { "ok" } else { "failed" }.into(),
+            status: if ok { Status::Ok } else { Status::Failed },
             reason: (!ok).then(|| last.gates.failed.join("; ")),
             attempts,
             wall_s,

@@ -65,8 +65,8 @@ pub fn verify(root: &Path) -> Result<Verification> {
     let mut problems = Vec::new();
     let mut seen = HashSet::new();
     for r in &records {
-        if !seen.insert(r.id.as_str()) {
-            problems.push(format!("{}: listed twice in the manifest", r.id));
+        if !seen.insert(r.sequence.id.as_str()) {
+            problems.push(format!("{}: listed twice in the manifest", r.sequence.id));
         }
     }
     let missing: Vec<&str> = planned
@@ -82,7 +82,12 @@ pub fn verify(root: &Path) -> Result<Verification> {
         ));
     }
     for r in &records {
-        problems.extend(check_record(&dir, &spec, by_id.get(r.id.as_str()), r));
+        problems.extend(check_record(
+            &dir,
+            &spec,
+            by_id.get(r.sequence.id.as_str()),
+            r,
+        ));
     }
     let listed: HashSet<String> = records.iter().filter_map(|r| r.file.clone()).collect();
     if let Ok(entries) = std::fs::read_dir(dir.root.join("sequences")) {
@@ -127,7 +132,7 @@ fn check_record(
     r: &ManifestRecord,
 ) -> Vec<String> {
     let mut problems = Vec::new();
-    let mut problem = |m: String| problems.push(format!("{}: {m}", r.id));
+    let mut problem = |m: String| problems.push(format!("{}: {m}", r.sequence.id));
     let Some(p) = plan else {
         problem("not in the plan".into());
         return problems;
@@ -135,7 +140,12 @@ fn check_record(
     if (
         &p.split, &p.garment, &p.motion, p.seed, &p.betas, p.material,
     ) != (
-        &r.split, &r.garment, &r.motion, r.seed, &r.betas, r.material,
+        &r.sequence.split,
+        &r.sequence.garment,
+        &r.sequence.motion,
+        r.sequence.seed,
+        &r.sequence.betas,
+        r.sequence.material,
     ) {
         problem("split, garment, motion, seed, shape or material differ from the plan".into());
     }
@@ -143,7 +153,7 @@ fn check_record(
         problem("no attempts recorded".into());
         return problems;
     };
-    if r.ok() != last.gates.passed || (r.status != "ok" && r.status != "failed") {
+    if r.ok() != last.gates.passed {
         problem(format!(
             "status '{}' disagrees with the last attempt's gates",
             r.status
@@ -191,7 +201,7 @@ fn check_record(
     if recording.template.positions.len() != r.vertices {
         problem("vertex count differs from the record".into());
     }
-    if meta.seed != Some(r.seed) || meta.betas != r.betas {
+    if meta.seed != Some(r.sequence.seed) || meta.betas != r.sequence.betas {
         problem("recording's seed or shape differs from the record".into());
     }
     let (pen, inside, stretch, crossings) = recorded_extremes(&recording);
@@ -244,7 +254,7 @@ mod tests {
         let unfinished = verify(root.path()).unwrap_err().to_string();
         assert!(unfinished.contains("has no manifest.jsonl"), "{unfinished}");
         let mut stranger = failed(&planned[0]);
-        stranger.id = "not-planned".into();
+        stranger.sequence.id = "not-planned".into();
         let records = [failed(&planned[0]), failed(&planned[0]), stranger];
         files::write_json_lines(&dir.manifest(), &records).unwrap();
         std::fs::create_dir(root.path().join("sequences")).unwrap();

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use dataset::{DatasetDir, SPLITS};
+use dataset::{DatasetDir, Split};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -21,30 +21,33 @@ pub fn dataset_sequences<'py>(
     folder: PathBuf,
     split: String,
 ) -> PyResult<Bound<'py, PyList>> {
-    if !SPLITS.contains(&split.as_str()) {
+    let Some(split) = Split::parse(&split) else {
         return Err(value_error(format!(
             "split '{split}': not one of {}",
-            SPLITS.join(", ")
+            Split::names()
         )));
-    }
+    };
     let dir = DatasetDir::new(&folder);
     let (_, _, records) = py.detach(|| dataset::load(&dir)).map_err(dataset_error)?;
     let out = PyList::empty(py);
-    for r in records.iter().filter(|r| r.split == split && r.ok()) {
+    for r in records
+        .iter()
+        .filter(|r| r.sequence.split == split && r.ok())
+    {
         let Some(file) = &r.file else { continue };
         let d = PyDict::new(py);
-        d.set_item("id", &r.id)?;
+        d.set_item("id", &r.sequence.id)?;
         d.set_item("file", folder.join(file))?;
-        d.set_item("garment", &r.garment)?;
-        d.set_item("motion", &r.motion)?;
-        d.set_item("betas", r.betas.clone())?;
+        d.set_item("garment", &r.sequence.garment)?;
+        d.set_item("motion", &r.sequence.motion)?;
+        d.set_item("betas", r.sequence.betas.clone())?;
         let material = PyDict::new(py);
-        material.set_item("k_s", r.material.stretch)?;
-        material.set_item("rho", r.material.density)?;
-        material.set_item("k_b", r.material.bending)?;
+        material.set_item("k_s", r.sequence.material.stretch)?;
+        material.set_item("rho", r.sequence.material.density)?;
+        material.set_item("k_b", r.sequence.material.bending)?;
         d.set_item("material", material)?;
         d.set_item("frames", r.frames)?;
-        d.set_item("seed", r.seed)?;
+        d.set_item("seed", r.sequence.seed)?;
         out.append(d)?;
     }
     Ok(out)
@@ -85,10 +88,11 @@ impl TensorShards {
     #[getter]
     fn splits(&self) -> Vec<String> {
         let m = &self.tensors.manifest;
-        SPLITS
-            .iter()
-            .filter(|s| m.splits.get(**s).is_some_and(|i| !i.shards.is_empty()))
-            .map(|s| s.to_string())
+        Split::ALL
+            .map(Split::name)
+            .into_iter()
+            .filter(|s| m.splits.get(*s).is_some_and(|i| !i.shards.is_empty()))
+            .map(str::to_string)
             .collect()
     }
 
@@ -120,10 +124,10 @@ impl TensorShards {
     /// `(N, 3, R, R)`, `bodies` float32 `(N, C, R, R)` where the tensors have body inputs,
     /// and int64 `template_index`, `sequence_index`, `frame_index` `(N,)`.
     fn split<'py>(&self, py: Python<'py>, name: String) -> PyResult<Bound<'py, PyDict>> {
-        if !SPLITS.contains(&name.as_str()) {
+        if Split::parse(&name).is_none() {
             return Err(value_error(format!(
                 "split '{name}': not one of {}",
-                SPLITS.join(", ")
+                Split::names()
             )));
         }
         let t = &self.tensors;

@@ -94,10 +94,10 @@ fn rerun(
     }
     let fps = frames.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
     Ok(SequenceResult {
-        id: record.id.clone(),
-        split: record.split.clone(),
-        garment: record.garment.clone(),
-        motion: record.motion.clone(),
+        id: record.sequence.id.clone(),
+        split: record.sequence.split.to_string(),
+        garment: record.sequence.garment.clone(),
+        motion: record.sequence.motion.clone(),
         file: file.to_string(),
         settings: json!({"perturb": format!("{perturbation:?}")}),
         methods: BTreeMap::from([(Method::Resimulated, truth.score(&garment, fps))]),
@@ -119,7 +119,9 @@ pub fn spread(
         files::read_json_lines(&DatasetDir::new(dir).manifest(), "dataset manifest")?;
     let chosen: Vec<&ManifestRecord> = records
         .iter()
-        .filter(|r| r.ok() && (splits.is_empty() || splits.contains(&r.split)))
+        .filter(|r| {
+            r.ok() && (splits.is_empty() || splits.iter().any(|s| s == r.sequence.split.name()))
+        })
         .take(max_sequences.unwrap_or(usize::MAX))
         .collect();
     if chosen.is_empty() {
@@ -139,7 +141,7 @@ pub fn spread(
         .par_iter()
         .map(|r| {
             let result = rerun(dir, r, perturbation)
-                .with_context(|| format!("{}: sequence {}", dir.display(), r.id));
+                .with_context(|| format!("{}: sequence {}", dir.display(), r.sequence.id));
             bar.inc(1);
             result
         })

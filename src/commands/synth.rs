@@ -155,7 +155,7 @@ pub fn run(args: &SynthArgs) -> Result<()> {
             })
             .collect::<Result<Vec<_>>>()
     })?;
-    known.extend(made.into_iter().map(|r| (r.id.clone(), r)));
+    known.extend(made.into_iter().map(|r| (r.sequence.id.clone(), r)));
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
     let frames = frames_done.load(Ordering::Relaxed);

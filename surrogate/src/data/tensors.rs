@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use dataset::{DatasetSpec, ManifestRecord, MaterialRanges, SPLITS};
+use dataset::{DatasetDir, DatasetSpec, ManifestRecord, MaterialRanges, Split};
 use motions::BodyModel;
 use rayon::prelude::*;
 use safetensors::tensor::{Dtype, TensorView};
@@ -169,8 +169,8 @@ type Finished = (ManifestRecord, PathBuf, Sequence);
 
 /// The dataset's finished sequences, each read once: checked against its manifest checksum,
 /// then parsed.
-fn finished(dir: &Path) -> Result<Vec<Finished>> {
-    let path = dir.join("manifest.jsonl");
+fn finished(dir: &DatasetDir) -> Result<Vec<Finished>> {
+    let path = dir.manifest();
     let mut records: Vec<ManifestRecord> = files::read_json_lines(&path, "dataset manifest")?;
     records.retain(ManifestRecord::ok);
     records
@@ -180,10 +180,10 @@ fn finished(dir: &Path) -> Result<Vec<Finished>> {
             let (Some(file), Some(sha)) = (&r.file, &r.sha256) else {
                 return Err(file_error(
                     &path,
-                    format!("sequence {} has no recording", r.id),
+                    format!("sequence {} has no recording", r.sequence.id),
                 ));
             };
-            let seq = dir.join(file);
+            let seq = dir.root.join(file);
             let bytes = files::read_verified(
                 &seq,
                 files::limits::RECORDING,
@@ -206,10 +206,10 @@ fn combined(dirs: &[PathBuf]) -> Result<(MaterialRanges, Vec<Finished>)> {
             "no dataset folder given".into(),
         ));
     };
-    let material = DatasetSpec::load(&first.join("spec.toml"))?.material;
+    let material = DatasetSpec::load(&DatasetDir::new(first).spec())?.material;
     let mut all: Vec<Finished> = Vec::new();
-    for dir in dirs {
-        let path = dir.join("spec.toml");
+    for dir in dirs.iter().map(|d| DatasetDir::new(d)) {
+        let path = dir.spec();
         let spec = DatasetSpec::load(&path)?;
         if spec.material != material {
             return Err(file_error(
@@ -223,11 +223,18 @@ fn combined(dirs: &[PathBuf]) -> Result<(MaterialRanges, Vec<Finished>)> {
                 ),
             ));
         }
-        for found in finished(dir)? {
-            if let Some(seen) = all.iter().find(|(r, ..)| r.id == found.0.id) {
+        for found in finished(&dir)? {
+            if let Some(seen) = all
+                .iter()
+                .find(|(r, ..)| r.sequence.id == found.0.sequence.id)
+            {
                 return Err(file_error(
-                    &dir.join("manifest.jsonl"),
-                    format!("sequence {} is also in {}", found.0.id, seen.1.display()),
+                    &dir.manifest(),
+                    format!(
+                        "sequence {} is also in {}",
+                        found.0.sequence.id,
+                        seen.1.display()
+                    ),
                 ));
             }
             all.push(found);
@@ -262,19 +269,24 @@ pub fn write_tensors(
     }
     let body_channels = BODY_CHANNELS + if options.nearest { NEAREST_CHANNELS } else { 0 };
     // Templates by garment name, from the recordings (sorted names give the indices).
-    let mut names: Vec<&str> = records.iter().map(|r| r.garment.as_str()).collect();
+    let mut names: Vec<&str> = records
+        .iter()
+        .map(|r| r.sequence.garment.as_str())
+        .collect();
     names.sort_unstable();
     names.dedup();
     let mut templates: Vec<Option<(TemplateArrays, GeometryImage)>> = vec![None; names.len()];
     for ((path, s), r) in sequences.iter().zip(&records) {
-        let g = names.binary_search(&r.garment.as_str()).unwrap_or(0);
+        let g = names
+            .binary_search(&r.sequence.garment.as_str())
+            .unwrap_or(0);
         match &templates[g] {
             Some((t, _)) if t.positions.len() != s.template.positions.len() => {
                 return Err(file_error(
                     path,
                     format!(
                         "garment '{}' has {} vertices here and {} in another sequence",
-                        r.garment,
+                        r.sequence.garment,
                         s.template.positions.len(),
                         t.positions.len()
                     ),
@@ -300,9 +312,9 @@ pub fn write_tensors(
     let (mut c_sum, mut c_sum2, mut c_count) = (vec![0.0; dim], vec![0.0; dim], 0.0);
     let (mut b_sum, mut b_sum2) = (vec![0.0; body_channels], vec![0.0; body_channels]);
     let mut train_templates = vec![false; templates.len()];
-    for split in SPLITS {
+    for split in Split::ALL.map(Split::name) {
         let members: Vec<usize> = (0..records.len())
-            .filter(|&i| records[i].split == split)
+            .filter(|&i| records[i].sequence.split.name() == split)
             .collect();
         if members.is_empty() {
             continue;
@@ -312,7 +324,7 @@ pub fn write_tensors(
             .map(|&i| {
                 let (path, s) = &sequences[i];
                 let g = names
-                    .binary_search(&records[i].garment.as_str())
+                    .binary_search(&records[i].sequence.garment.as_str())
                     .unwrap_or(0);
                 let (template, image) = &templates[g];
                 let mut targets = Targets::new(

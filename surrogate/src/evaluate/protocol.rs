@@ -55,23 +55,26 @@ pub fn select(
             continue;
         }
         asked.push(split);
-        let of_split = all.iter().filter(|r| r.ok() && &r.split == split).cloned();
+        let of_split = all
+            .iter()
+            .filter(|r| r.ok() && r.sequence.split.name() == split)
+            .cloned();
         records.extend(of_split.take(max.unwrap_or(usize::MAX)));
     }
     // A sequence listed twice (a manifest concatenated with itself, say) would count twice.
     for (k, r) in records.iter().enumerate() {
-        if records[..k].iter().any(|o| o.id == r.id) {
-            let line = all.iter().filter(|o| o.id == r.id).count();
-            let problem = format!("sequence '{}' is listed {line} times", r.id);
+        if records[..k].iter().any(|o| o.sequence.id == r.sequence.id) {
+            let line = all
+                .iter()
+                .filter(|o| o.sequence.id == r.sequence.id)
+                .count();
+            let problem = format!("sequence '{}' is listed {line} times", r.sequence.id);
             return Err(file_error(manifest, problem));
         }
     }
-    if let Some(bad) = records
-        .iter()
-        .find(|r| r.id.is_empty() || r.id.contains(['/', '\\']) || r.id.starts_with('.'))
-    {
-        let problem = format!("sequence id '{}' is not a plain file name", bad.id);
-        return Err(file_error(manifest, problem));
+    // Ids become file names (the cache, per-sequence outputs): the dataset's one check.
+    for r in &records {
+        r.check_paths().map_err(|e| file_error(manifest, e))?;
     }
     if records.is_empty() {
         let problem = format!("no finished sequences in the splits {}", splits.join(", "));
@@ -195,10 +198,9 @@ impl Evaluation<'_> {
     /// Scores one sequence with every method; its recording must match the manifest's
     /// checksum.
     pub fn sequence(&self, record: &ManifestRecord) -> Result<SequenceResult> {
-        let file = record
-            .file
-            .as_deref()
-            .ok_or_else(|| Error::Invalid(format!("sequence {} has no recording", record.id)))?;
+        let file = record.file.as_deref().ok_or_else(|| {
+            Error::Invalid(format!("sequence {} has no recording", record.sequence.id))
+        })?;
         let path = self.data.join(file);
         if let Some(expected) = &record.sha256 {
             let (sha, _) = files::sha256_file(&path)?;
@@ -210,17 +212,21 @@ impl Evaluation<'_> {
         let seq = Sequence::read(&path)?;
         // Results are grouped by the manifest's labels: they must be the recording's own (a
         // garment file is recorded under its file name's stem).
-        let stem = Path::new(&record.garment)
+        let stem = Path::new(&record.sequence.garment)
             .file_stem()
             .map(|s| s.to_string_lossy());
-        let garment_agrees =
-            seq.meta.garment == record.garment || stem.is_some_and(|s| s == seq.meta.garment);
-        if !garment_agrees || seq.meta.motion != record.motion {
+        let garment_agrees = seq.meta.garment == record.sequence.garment
+            || stem.is_some_and(|s| s == seq.meta.garment);
+        if !garment_agrees || seq.meta.motion != record.sequence.motion {
             return Err(file_error(
                 &path,
                 format!(
                     "holds '{}' on '{}', but the manifest's line for sequence {} says '{}' on '{}'",
-                    seq.meta.garment, seq.meta.motion, record.id, record.garment, record.motion
+                    seq.meta.garment,
+                    seq.meta.motion,
+                    record.sequence.id,
+                    record.sequence.garment,
+                    record.sequence.motion
                 ),
             ));
         }
@@ -264,10 +270,10 @@ impl Evaluation<'_> {
             }
         }
         Ok(SequenceResult {
-            id: record.id.clone(),
-            split: record.split.clone(),
-            garment: record.garment.clone(),
-            motion: record.motion.clone(),
+            id: record.sequence.id.clone(),
+            split: record.sequence.split.to_string(),
+            garment: record.sequence.garment.clone(),
+            motion: record.sequence.motion.clone(),
             file: file.to_string(),
             settings: self.settings_of(record),
             methods,
@@ -280,7 +286,8 @@ impl Evaluation<'_> {
     pub fn cached(&self, path: &Path, record: &ManifestRecord) -> Option<SequenceResult> {
         let text = std::fs::read_to_string(path).ok()?;
         let r: SequenceResult = serde_json::from_str(&text).ok()?;
-        (r.settings == self.settings_of(record) && r.split == record.split).then_some(r)
+        (r.settings == self.settings_of(record) && r.split == record.sequence.split.name())
+            .then_some(r)
     }
 
     /// Scores `records` in parallel, each result cached as `cache/<id>.json` when a cache
@@ -296,19 +303,19 @@ impl Evaluation<'_> {
         let results = records
             .par_iter()
             .map(|record| {
-                let file = cache.map(|d| d.join(format!("{}.json", record.id)));
+                let file = cache.map(|d| d.join(format!("{}.json", record.sequence.id)));
                 if let Some(hit) = file.as_deref().and_then(|f| self.cached(f, record)) {
-                    done(&record.id);
+                    done(&record.sequence.id);
                     return Ok((hit, true));
                 }
                 let result = self.sequence(record).map_err(|e| Error::Sequence {
-                    id: record.id.clone(),
+                    id: record.sequence.id.clone(),
                     source: Box::new(e),
                 })?;
                 if let Some(f) = &file {
                     files::write_json(f, &result)?;
                 }
-                done(&record.id);
+                done(&record.sequence.id);
                 Ok((result, false))
             })
             .collect::<Result<Vec<_>>>()?;
@@ -318,7 +325,7 @@ impl Evaluation<'_> {
 
     /// The settings of one sequence's rows: the run's, and the recording they scored.
     fn settings_of(&self, record: &ManifestRecord) -> Value {
-        json!({"run": self.fingerprint, "file": record.file, "sha256": record.sha256, "split": record.split})
+        json!({"run": self.fingerprint, "file": record.file, "sha256": record.sha256, "split": record.sequence.split})
     }
 }
 
@@ -336,7 +343,7 @@ mod tests {
         }))
         .unwrap();
         if !ok {
-            r.status = "failed".into();
+            r.status = dataset::Status::Failed;
         }
         r
     }
@@ -351,7 +358,7 @@ mod tests {
         ];
         let manifest = Path::new("m.jsonl");
         let splits = |s: &[&str]| s.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-        let ids = |r: Vec<ManifestRecord>| r.into_iter().map(|r| r.id).collect::<Vec<_>>();
+        let ids = |r: Vec<ManifestRecord>| r.into_iter().map(|r| r.sequence.id).collect::<Vec<_>>();
         let picked = select(&all, &splits(&["test", "train", "test"]), None, manifest);
         assert_eq!(ids(picked.unwrap()), ["a", "d", "c"]);
         let one = select(&all, &splits(&["test"]), Some(1), manifest).unwrap();

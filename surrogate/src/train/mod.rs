@@ -372,18 +372,19 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
     Ok(summary)
 }
 
-/// `preferred` when it has frames, else the first held-out split (in `dataset::SPLITS`
+/// `preferred` when it has frames, else the first held-out split (in `dataset::Split::ALL`
 /// order) that has: small datasets often leave the main test split empty.
 fn held_out_split(tensors: &TrainingTensors, preferred: &str) -> Option<String> {
     let frames = |s: &str| tensors.manifest.splits.get(s).map_or(0, |i| i.frames);
     if frames(preferred) > 0 {
         return Some(preferred.to_string());
     }
-    dataset::SPLITS
-        .iter()
-        .filter(|s| **s != "train")
+    dataset::Split::ALL
+        .into_iter()
+        .filter(|s| *s != dataset::Split::Train)
+        .map(dataset::Split::name)
         .find(|s| frames(s) > 0)
-        .map(|s| s.to_string())
+        .map(str::to_string)
 }
 
 /// Two held-out frames (training frames when there are none) at s = 0.25 and 0.75: the fixed
