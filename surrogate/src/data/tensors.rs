@@ -243,32 +243,15 @@ fn combined(dirs: &[PathBuf]) -> Result<(MaterialRanges, Vec<Finished>)> {
     Ok((material, all))
 }
 
-/// Turns the datasets in `dirs` (one, or several with the same material ranges) into tensors
-/// in `out`; `progress` is called once per sequence.
-pub fn write_tensors(
-    dirs: &[PathBuf],
-    out: &Path,
-    model: &BodyModel,
-    options: &TensorOptions,
-    progress: impl Fn() + Sync,
-) -> Result<TensorManifest> {
-    let (material, found) = combined(dirs)?;
-    let (records, sequences): (Vec<ManifestRecord>, Vec<(PathBuf, Sequence)>) =
-        found.into_iter().map(|(r, path, s)| (r, (path, s))).unzip();
-    let layout = ConditionLayout {
-        betas: model.num_betas(),
-        window: options.window,
-        material,
-        scaling: options.conditions,
-    };
-    let with_bodies = options.target == TargetKind::LbsResidual;
-    if options.nearest && !with_bodies {
-        return Err(crate::error::Error::Invalid(
-            "nearest-body inputs need the lbs_residual target (they extend its body inputs)".into(),
-        ));
-    }
-    let body_channels = BODY_CHANNELS + if options.nearest { NEAREST_CHANNELS } else { 0 };
-    // Templates by garment name, from the recordings (sorted names give the indices).
+/// The templates of the sequences' garments, one per garment name (sorted names give the
+/// indices), each with its geometry image; a garment whose vertex count differs between
+/// sequences is refused, naming the recording.
+#[allow(clippy::type_complexity)]
+fn template_images<'a>(
+    records: &'a [ManifestRecord],
+    sequences: &[(PathBuf, Sequence)],
+    resolution: usize,
+) -> Result<(Vec<&'a str>, Vec<(TemplateArrays, GeometryImage)>)> {
     let mut names: Vec<&str> = records
         .iter()
         .map(|r| r.sequence.garment.as_str())
@@ -276,7 +259,7 @@ pub fn write_tensors(
     names.sort_unstable();
     names.dedup();
     let mut templates: Vec<Option<(TemplateArrays, GeometryImage)>> = vec![None; names.len()];
-    for ((path, s), r) in sequences.iter().zip(&records) {
+    for ((path, s), r) in sequences.iter().zip(records) {
         let g = names
             .binary_search(&r.sequence.garment.as_str())
             .unwrap_or(0);
@@ -295,190 +278,227 @@ pub fn write_tensors(
             Some(_) => {}
             None => {
                 let t = &s.template;
-                let image = GeometryImage::of_template(t, options.resolution)
-                    .map_err(|e| file_error(path, e))?;
+                let image =
+                    GeometryImage::of_template(t, resolution).map_err(|e| file_error(path, e))?;
                 templates[g] = Some((t.clone(), image));
             }
         }
     }
-    let templates: Vec<(TemplateArrays, GeometryImage)> = templates.into_iter().flatten().collect();
-    let loss_masks: Vec<Vec<bool>> = templates.iter().map(|(_, i)| i.loss_mask()).collect();
-    std::fs::create_dir_all(out).map_err(|e| file_error(out, e))?;
-    let r = options.resolution;
-    let mut manifest_splits = BTreeMap::new();
-    let mut template_frames = vec![BTreeMap::<String, usize>::new(); templates.len()];
-    let dim = layout.dim();
-    let (mut t_sum, mut t_sum2, mut t_count) = (vec![0.0; 3], vec![0.0; 3], 0.0);
-    let (mut c_sum, mut c_sum2, mut c_count) = (vec![0.0; dim], vec![0.0; dim], 0.0);
-    let (mut b_sum, mut b_sum2) = (vec![0.0; body_channels], vec![0.0; body_channels]);
-    let mut train_templates = vec![false; templates.len()];
-    for split in Split::ALL.map(Split::name) {
-        let members: Vec<usize> = (0..records.len())
-            .filter(|&i| records[i].sequence.split.name() == split)
-            .collect();
-        if members.is_empty() {
-            continue;
-        }
-        let frames: Vec<Vec<Frame>> = members
-            .par_iter()
-            .map(|&i| {
-                let (path, s) = &sequences[i];
-                let g = names
-                    .binary_search(&records[i].sequence.garment.as_str())
-                    .unwrap_or(0);
-                let (template, image) = &templates[g];
-                let mut targets = Targets::new(
-                    model,
-                    &template.positions,
-                    &template.triangles,
-                    options.target,
-                    options.root,
-                )?;
-                let motion = s.motion()?;
-                let mut surface = PosedSurface::default();
-                let mut out = Vec::new();
-                for k in (s.first_motion_frame()..s.len()).step_by(options.every.max(1)) {
-                    let condition = layout.vector(&motion, k, &s.betas[k], &s.meta.material)?;
-                    let target = targets.encode(model, s.body(k), &s.garment[k])?;
-                    let map = image.encode(&target).map_err(|e| file_error(path, e))?;
-                    let bodies = if with_bodies {
-                        let before = s.body(k.saturating_sub(1));
-                        let nearest = match options.nearest {
-                            true => Some(surface.at(model, s.body(k))?),
-                            false => None,
-                        };
-                        body_input_maps(&mut targets, image, model, s.body(k), before, nearest)
-                            .map_err(|e| file_error(path, e))?
-                    } else {
-                        Vec::new()
-                    };
-                    out.push(Frame {
-                        condition: condition.iter().map(|&x| x as f32).collect(),
-                        target: channels_first(&map),
-                        bodies,
-                        template: g,
-                        sequence: i,
-                        frame: k,
-                    });
-                }
-                progress();
-                Ok(out)
-            })
-            .collect::<Result<_>>()?;
-        let frames: Vec<Frame> = frames.into_iter().flatten().collect();
-        if split == "train" {
-            for f in &frames {
-                train_templates[f.template] = true;
-                let mask = &loss_masks[f.template];
-                for c in 0..3 {
-                    for (k, &m) in mask.iter().enumerate() {
-                        if m {
-                            let x = f.target[c * r * r + k] as f64;
-                            t_sum[c] += x;
-                            t_sum2[c] += x * x;
-                        }
-                    }
-                }
-                for c in 0..f.bodies.len() / (r * r) {
-                    for (k, &m) in mask.iter().enumerate() {
-                        if m {
-                            let x = f.bodies[c * r * r + k] as f64;
-                            b_sum[c] += x;
-                            b_sum2[c] += x * x;
-                        }
-                    }
-                }
-                t_count += mask.iter().filter(|&&m| m).count() as f64;
-                for (d, &x) in f.condition.iter().enumerate() {
-                    c_sum[d] += x as f64;
-                    c_sum2[d] += x as f64 * x as f64;
-                }
-                c_count += 1.0;
-            }
-        }
-        for f in &frames {
-            *template_frames[f.template]
-                .entry(split.to_string())
-                .or_default() += 1;
-        }
-        let mut info = SplitInfo {
-            frames: frames.len(),
-            sequences: members.len(),
-            shards: Vec::new(),
-        };
-        for (n, chunk) in frames.chunks(options.shard_frames.max(1)).enumerate() {
-            let file = format!("{split}-{n:04}.safetensors");
-            let path = out.join(&file);
-            let count = chunk.len();
-            let conditions: Vec<f32> = chunk
-                .iter()
-                .flat_map(|f| f.condition.iter().copied())
-                .collect();
-            let targets: Vec<f32> = chunk
-                .iter()
-                .flat_map(|f| f.target.iter().copied())
-                .collect();
-            let mut tensors = Vec::new();
-            if with_bodies {
-                let bodies: Vec<f32> = chunk
-                    .iter()
-                    .flat_map(|f| f.bodies.iter().copied())
-                    .collect();
-                tensors.push((
-                    "bodies",
-                    Dtype::F32,
-                    vec![count, body_channels, r, r],
-                    f32_bytes(&bodies),
-                ));
-            }
-            let bytes = safetensors_bytes(
-                &[
-                    (
-                        "conditions",
-                        Dtype::F32,
-                        vec![count, dim],
-                        f32_bytes(&conditions),
-                    ),
-                    (
-                        "targets",
-                        Dtype::F32,
-                        vec![count, 3, r, r],
-                        f32_bytes(&targets),
-                    ),
-                    (
-                        "template_index",
-                        Dtype::I64,
-                        vec![count],
-                        i64_bytes(chunk.iter().map(|f| f.template)),
-                    ),
-                    (
-                        "sequence_index",
-                        Dtype::I64,
-                        vec![count],
-                        i64_bytes(chunk.iter().map(|f| f.sequence)),
-                    ),
-                    (
-                        "frame_index",
-                        Dtype::I64,
-                        vec![count],
-                        i64_bytes(chunk.iter().map(|f| f.frame)),
-                    ),
-                ]
-                .into_iter()
-                .chain(tensors)
-                .collect::<Vec<_>>(),
-                &path,
-            )?;
-            let sha256 = write_atomic(&path, &bytes)?;
-            info.shards.push(ShardInfo {
-                file,
-                frames: count,
-                sha256,
+    Ok((names, templates.into_iter().flatten().collect()))
+}
+
+/// What turns a sequence into frames: the body model, the options, the condition layout and
+/// the templates' geometry images.
+struct Encoder<'a> {
+    model: &'a BodyModel,
+    options: &'a TensorOptions,
+    layout: ConditionLayout,
+    names: &'a [&'a str],
+    templates: &'a [(TemplateArrays, GeometryImage)],
+    with_bodies: bool,
+}
+
+impl Encoder<'_> {
+    /// The frames of sequence `i` (every `options.every`-th after the blend-in), encoded.
+    fn sequence(
+        &self,
+        i: usize,
+        record: &ManifestRecord,
+        path: &Path,
+        s: &Sequence,
+    ) -> Result<Vec<Frame>> {
+        let (model, options) = (self.model, self.options);
+        let g = self
+            .names
+            .binary_search(&record.sequence.garment.as_str())
+            .unwrap_or(0);
+        let (template, image) = &self.templates[g];
+        let mut targets = Targets::new(
+            model,
+            &template.positions,
+            &template.triangles,
+            options.target,
+            options.root,
+        )?;
+        let motion = s.motion()?;
+        let mut surface = PosedSurface::default();
+        let mut out = Vec::new();
+        for k in (s.first_motion_frame()..s.len()).step_by(options.every.max(1)) {
+            let condition = self
+                .layout
+                .vector(&motion, k, &s.betas[k], &s.meta.material)?;
+            let target = targets.encode(model, s.body(k), &s.garment[k])?;
+            let map = image.encode(&target).map_err(|e| file_error(path, e))?;
+            let bodies = if self.with_bodies {
+                let before = s.body(k.saturating_sub(1));
+                let nearest = match options.nearest {
+                    true => Some(surface.at(model, s.body(k))?),
+                    false => None,
+                };
+                body_input_maps(&mut targets, image, model, s.body(k), before, nearest)
+                    .map_err(|e| file_error(path, e))?
+            } else {
+                Vec::new()
+            };
+            out.push(Frame {
+                condition: condition.iter().map(|&x| x as f32).collect(),
+                target: channels_first(&map),
+                bodies,
+                template: g,
+                sequence: i,
+                frame: k,
             });
         }
-        manifest_splits.insert(split.to_string(), info);
+        Ok(out)
     }
-    // Templates: position maps, loss masks and inside masks, channels first.
+}
+
+/// The train split's sums over loss-mask texels (targets, body inputs) and frames
+/// (conditions), and which templates it holds: the normalization statistics.
+struct TrainSums {
+    resolution: usize,
+    targets: (Vec<f64>, Vec<f64>, f64),
+    conditions: (Vec<f64>, Vec<f64>, f64),
+    bodies: (Vec<f64>, Vec<f64>),
+    templates: Vec<bool>,
+}
+
+impl TrainSums {
+    fn new(resolution: usize, dim: usize, body_channels: usize, templates: usize) -> Self {
+        Self {
+            resolution,
+            targets: (vec![0.0; 3], vec![0.0; 3], 0.0),
+            conditions: (vec![0.0; dim], vec![0.0; dim], 0.0),
+            bodies: (vec![0.0; body_channels], vec![0.0; body_channels]),
+            templates: vec![false; templates],
+        }
+    }
+
+    /// Adds a training frame, its targets and body inputs over `mask` (the template's loss
+    /// mask).
+    fn add(&mut self, f: &Frame, mask: &[bool]) {
+        let rr = self.resolution * self.resolution;
+        self.templates[f.template] = true;
+        let (t_sum, t_sum2, t_count) = &mut self.targets;
+        for c in 0..3 {
+            for (k, &m) in mask.iter().enumerate() {
+                if m {
+                    let x = f.target[c * rr + k] as f64;
+                    t_sum[c] += x;
+                    t_sum2[c] += x * x;
+                }
+            }
+        }
+        let (b_sum, b_sum2) = &mut self.bodies;
+        for c in 0..f.bodies.len() / rr {
+            for (k, &m) in mask.iter().enumerate() {
+                if m {
+                    let x = f.bodies[c * rr + k] as f64;
+                    b_sum[c] += x;
+                    b_sum2[c] += x * x;
+                }
+            }
+        }
+        *t_count += mask.iter().filter(|&&m| m).count() as f64;
+        let (c_sum, c_sum2, c_count) = &mut self.conditions;
+        for (d, &x) in f.condition.iter().enumerate() {
+            c_sum[d] += x as f64;
+            c_sum2[d] += x as f64 * x as f64;
+        }
+        *c_count += 1.0;
+    }
+
+    /// The statistics of every tensor kind, the position maps' given.
+    fn normalization(
+        &self,
+        layout: &ConditionLayout,
+        positions: Stats,
+        bodies: bool,
+    ) -> Normalization {
+        let (t_sum, t_sum2, t_count) = &self.targets;
+        let (c_sum, c_sum2, c_count) = &self.conditions;
+        let (b_sum, b_sum2) = &self.bodies;
+        Normalization {
+            targets: stats(t_sum, t_sum2, *t_count),
+            conditions: layout.statistics(c_sum, c_sum2, *c_count),
+            position_maps: positions,
+            bodies: bodies.then(|| body_stats(b_sum, b_sum2, *t_count)),
+        }
+    }
+}
+
+/// A split's frames written as shards of at most `shard_frames` frames, `<split>-NNNN`.
+fn write_shards(
+    out: &Path,
+    split: &str,
+    frames: &[Frame],
+    shard_frames: usize,
+    [dim, body_channels, r]: [usize; 3],
+) -> Result<Vec<ShardInfo>> {
+    let mut shards = Vec::new();
+    for (n, chunk) in frames.chunks(shard_frames.max(1)).enumerate() {
+        let file = format!("{split}-{n:04}.safetensors");
+        let path = out.join(&file);
+        let count = chunk.len();
+        let flat = |part: fn(&Frame) -> &[f32]| -> Vec<f32> {
+            chunk.iter().flat_map(|f| part(f).iter().copied()).collect()
+        };
+        let index = |part: fn(&Frame) -> usize| i64_bytes(chunk.iter().map(part));
+        let mut tensors = vec![
+            (
+                "conditions",
+                Dtype::F32,
+                vec![count, dim],
+                f32_bytes(&flat(|f| &f.condition)),
+            ),
+            (
+                "targets",
+                Dtype::F32,
+                vec![count, 3, r, r],
+                f32_bytes(&flat(|f| &f.target)),
+            ),
+            (
+                "template_index",
+                Dtype::I64,
+                vec![count],
+                index(|f| f.template),
+            ),
+            (
+                "sequence_index",
+                Dtype::I64,
+                vec![count],
+                index(|f| f.sequence),
+            ),
+            ("frame_index", Dtype::I64, vec![count], index(|f| f.frame)),
+        ];
+        if body_channels > 0 {
+            tensors.push((
+                "bodies",
+                Dtype::F32,
+                vec![count, body_channels, r, r],
+                f32_bytes(&flat(|f| &f.bodies)),
+            ));
+        }
+        let bytes = safetensors_bytes(&tensors, &path)?;
+        let sha256 = write_atomic(&path, &bytes)?;
+        shards.push(ShardInfo {
+            file,
+            frames: count,
+            sha256,
+        });
+    }
+    Ok(shards)
+}
+
+/// `templates.safetensors`: position maps, loss masks and inside masks, channels first;
+/// returns its SHA-256 and the statistics of the training templates' position maps.
+fn write_templates(
+    out: &Path,
+    templates: &[(TemplateArrays, GeometryImage)],
+    loss_masks: &[Vec<bool>],
+    in_training: &[bool],
+    r: usize,
+) -> Result<(String, Stats)> {
     let g = templates.len();
     let mut positions = Vec::with_capacity(g * 3 * r * r);
     let mut masks = Vec::with_capacity(g * r * r);
@@ -489,7 +509,7 @@ pub fn write_tensors(
         positions.extend(channels_first(&map));
         masks.extend(loss_masks[i].iter().map(|&m| m as u8 as f32));
         inside.extend(image.atlas().inside().iter().map(|&m| m as u8 as f32));
-        if train_templates[i] {
+        if in_training[i] {
             for (p, _) in map.iter().zip(image.atlas().inside()).filter(|(_, m)| **m) {
                 for c in 0..3 {
                     p_sum[c] += p[c];
@@ -513,7 +533,94 @@ pub fn write_tensors(
         ],
         &path,
     )?;
-    let templates_sha256 = write_atomic(&path, &bytes)?;
+    Ok((
+        write_atomic(&path, &bytes)?,
+        stats(&p_sum, &p_sum2, p_count),
+    ))
+}
+
+/// Turns the datasets in `dirs` (one, or several with the same material ranges) into tensors
+/// in `out`; `progress` is called once per sequence. Stages: the finished sequences read and
+/// checked, the templates' geometry images, each split's frames encoded (sequences in
+/// parallel) and written as shards while the train split's sums accumulate, the templates'
+/// maps, the manifest.
+pub fn write_tensors(
+    dirs: &[PathBuf],
+    out: &Path,
+    model: &BodyModel,
+    options: &TensorOptions,
+    progress: impl Fn() + Sync,
+) -> Result<TensorManifest> {
+    let (material, found) = combined(dirs)?;
+    let (records, sequences): (Vec<ManifestRecord>, Vec<(PathBuf, Sequence)>) =
+        found.into_iter().map(|(r, path, s)| (r, (path, s))).unzip();
+    let layout = ConditionLayout {
+        betas: model.num_betas(),
+        window: options.window,
+        material,
+        scaling: options.conditions,
+    };
+    let with_bodies = options.target == TargetKind::LbsResidual;
+    if options.nearest && !with_bodies {
+        return Err(crate::error::Error::Invalid(
+            "nearest-body inputs need the lbs_residual target (they extend its body inputs)".into(),
+        ));
+    }
+    let body_channels = match (with_bodies, options.nearest) {
+        (false, _) => 0,
+        (true, false) => BODY_CHANNELS,
+        (true, true) => BODY_CHANNELS + NEAREST_CHANNELS,
+    };
+    let (names, templates) = template_images(&records, &sequences, options.resolution)?;
+    let loss_masks: Vec<Vec<bool>> = templates.iter().map(|(_, i)| i.loss_mask()).collect();
+    std::fs::create_dir_all(out).map_err(|e| file_error(out, e))?;
+    let (r, dim) = (options.resolution, layout.dim());
+    let encoder = Encoder {
+        model,
+        options,
+        layout,
+        names: &names,
+        templates: &templates,
+        with_bodies,
+    };
+    let mut sums = TrainSums::new(r, dim, body_channels, templates.len());
+    let mut manifest_splits = BTreeMap::new();
+    let mut template_frames = vec![BTreeMap::<String, usize>::new(); templates.len()];
+    for split in Split::ALL.map(Split::name) {
+        let members: Vec<usize> = (0..records.len())
+            .filter(|&i| records[i].sequence.split.name() == split)
+            .collect();
+        if members.is_empty() {
+            continue;
+        }
+        let frames: Vec<Vec<Frame>> = members
+            .par_iter()
+            .map(|&i| {
+                let (path, s) = &sequences[i];
+                let frames = encoder.sequence(i, &records[i], path, s);
+                progress();
+                frames
+            })
+            .collect::<Result<_>>()?;
+        let frames: Vec<Frame> = frames.into_iter().flatten().collect();
+        for f in &frames {
+            if split == Split::Train.name() {
+                sums.add(f, &loss_masks[f.template]);
+            }
+            *template_frames[f.template]
+                .entry(split.to_string())
+                .or_default() += 1;
+        }
+        let shape = [dim, body_channels, r];
+        let info = SplitInfo {
+            frames: frames.len(),
+            sequences: members.len(),
+            shards: write_shards(out, split, &frames, options.shard_frames, shape)?,
+        };
+        manifest_splits.insert(split.to_string(), info);
+    }
+    let (templates_sha256, positions) =
+        write_templates(out, &templates, &loss_masks, &sums.templates, r)?;
     let manifest = TensorManifest {
         format: TENSORS_FORMAT,
         source: dirs
@@ -544,12 +651,7 @@ pub fn write_tensors(
             })
             .collect(),
         templates_sha256,
-        normalization: Normalization {
-            targets: stats(&t_sum, &t_sum2, t_count),
-            conditions: layout.statistics(&c_sum, &c_sum2, c_count),
-            position_maps: stats(&p_sum, &p_sum2, p_count),
-            bodies: with_bodies.then(|| body_stats(&b_sum, &b_sum2, t_count)),
-        },
+        normalization: sums.normalization(&layout, positions, with_bodies),
     };
     let json = serde_json::to_vec_pretty(&manifest).map_err(|e| file_error(out, e))?;
     write_atomic(&out.join("manifest.json"), &json)?;
