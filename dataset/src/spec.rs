@@ -279,6 +279,18 @@ pub struct SplitSpec {
     pub test_material_ranges: Option<MaterialRanges>,
 }
 
+/// `r` is a range `[lo', hi']` of finite numbers within `[lo, hi]`, else an error naming `key`.
+fn check_range(key: &str, r: [f64; 2], lo: f64, hi: f64) -> std::result::Result<(), String> {
+    if !(r[0].is_finite() && r[1].is_finite() && lo <= r[0] && r[0] <= r[1] && r[1] <= hi) {
+        Err(format!(
+            "{key} = [{}, {}] must be a range within [{lo}, {hi}]",
+            r[0], r[1]
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 impl DatasetSpec {
     /// Parses and checks a spec; errors name the file and the key at fault.
     pub fn parse(text: &str, origin: &Path) -> Result<Self> {
@@ -304,24 +316,32 @@ impl DatasetSpec {
         toml::to_string(self).unwrap_or_default()
     }
 
+    /// Checks every key, naming the first bad one: the stages below, in order.
     fn validate(&self) -> std::result::Result<(), String> {
-        let range = |key: &str, r: [f64; 2], lo: f64, hi: f64| {
-            if !(r[0].is_finite() && r[1].is_finite() && lo <= r[0] && r[0] <= r[1] && r[1] <= hi) {
-                Err(format!(
-                    "{key} = [{}, {}] must be a range within [{lo}, {hi}]",
-                    r[0], r[1]
-                ))
-            } else {
-                Ok(())
-            }
-        };
-        let s = &self.sequence;
+        self.check_lists()?;
+        self.check_sequence()?;
+        self.check_split_sizes()?;
+        self.check_gate_limits()?;
+        self.check_ranges()?;
+        self.check_solver_and_gates()?;
+        self.check_variants()?;
+        self.check_split_tags()
+    }
+
+    /// A name, and at least one garment and one motion.
+    fn check_lists(&self) -> std::result::Result<(), String> {
         if self.name.trim().is_empty() {
             return Err("name must not be empty".into());
         }
         if self.garments.is_empty() || self.motions.is_empty() {
             return Err("garments and motions must each list at least one entry".into());
         }
+        Ok(())
+    }
+
+    /// The sequence's frame counts and draws, within their bounds.
+    fn check_sequence(&self) -> std::result::Result<(), String> {
+        let s = &self.sequence;
         if s.frames == Some(0) {
             return Err("sequence.frames must be at least 1".into());
         }
@@ -350,6 +370,11 @@ impl DatasetSpec {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// No held-out set larger than a plan may be.
+    fn check_split_sizes(&self) -> std::result::Result<(), String> {
         let sp = &self.splits;
         for (key, n) in [
             ("splits.test", sp.test),
@@ -363,6 +388,11 @@ impl DatasetSpec {
                 return Err(format!("{key} = {n} is more than {MAX_PLANNED_SEQUENCES}"));
             }
         }
+        Ok(())
+    }
+
+    /// The time-out and retries, within their bounds.
+    fn check_gate_limits(&self) -> std::result::Result<(), String> {
         if self.gates.timeout_s > MAX_TIMEOUT_S {
             return Err(format!(
                 "gates.timeout_s = {} is more than {MAX_TIMEOUT_S} s (a week)",
@@ -375,10 +405,16 @@ impl DatasetSpec {
                 self.gates.retries
             ));
         }
+        Ok(())
+    }
+
+    /// Shapes, friction and material ranges, within the engine's bounds.
+    fn check_ranges(&self) -> std::result::Result<(), String> {
+        let s = &self.sequence;
         if s.betas > 300 {
             return Err(format!("sequence.betas = {} is more than 300", s.betas));
         }
-        range("sequence.betas_range", s.betas_range, -5.0, 5.0)?;
+        check_range("sequence.betas_range", s.betas_range, -5.0, 5.0)?;
         if !(0.0..=2.0).contains(&s.friction) {
             return Err(format!(
                 "sequence.friction = {} is outside [0, 2]",
@@ -386,17 +422,22 @@ impl DatasetSpec {
             ));
         }
         let materials = |prefix: &str, m: &MaterialRanges| {
-            range(&format!("{prefix}.k_s"), m.k_s, 1.0, 1e5)?;
-            range(&format!("{prefix}.rho"), m.rho, 1e-3, 10.0)?;
-            range(&format!("{prefix}.log10_k_b"), m.log10_k_b, -12.0, -1.0)
+            check_range(&format!("{prefix}.k_s"), m.k_s, 1.0, 1e5)?;
+            check_range(&format!("{prefix}.rho"), m.rho, 1e-3, 10.0)?;
+            check_range(&format!("{prefix}.log10_k_b"), m.log10_k_b, -12.0, -1.0)
         };
         materials("material", &self.material)?;
         if let Some(m) = &self.splits.test_material_ranges {
             materials("splits.test_material_ranges", m)?;
         }
         if let Some(r) = self.splits.test_betas_range {
-            range("splits.test_betas_range", r, -5.0, 5.0)?;
+            check_range("splits.test_betas_range", r, -5.0, 5.0)?;
         }
+        Ok(())
+    }
+
+    /// The solver settings and the gate thresholds.
+    fn check_solver_and_gates(&self) -> std::result::Result<(), String> {
         let v = &self.solver;
         let g = &self.gates;
         for (key, n) in [
@@ -437,6 +478,11 @@ impl DatasetSpec {
                 return Err(format!("{key} = {x} must be a positive number"));
             }
         }
+        Ok(())
+    }
+
+    /// Variants only of library designs, and not too many.
+    fn check_variants(&self) -> std::result::Result<(), String> {
         for g in &self.garments {
             for (key, n) in [
                 ("variants", g.variants),
@@ -461,6 +507,11 @@ impl DatasetSpec {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Every held-out set has the garments and motions it draws from, and (but for a test grid alone) something to train on.
+    fn check_split_tags(&self) -> std::result::Result<(), String> {
         let has = |tag: Tag| self.garments.iter().any(|e| e.split == tag);
         let has_motion = |tag: Tag| self.motions.iter().any(|e| e.split == tag);
         let sp = &self.splits;
