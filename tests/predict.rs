@@ -655,6 +655,7 @@ fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
             prediction: surrogate::model::Prediction::Data,
             zero_outside: true,
             body_channels: channels,
+            previous_noise: None,
         };
         let mut rng = surrogate::noise::generator(0, 0, 0);
         let batch =

@@ -52,6 +52,14 @@ impl Frames {
     pub fn is_empty(&self) -> bool {
         self.template.is_empty()
     }
+
+    /// The frame just before frame `f` of the same sequence, if it is held: shards keep a
+    /// sequence's frames in order, so it is the one stored before `f` (the first frame of a
+    /// sequence, and every frame of tensors made with `--every` above 1, have none).
+    pub fn previous(&self, f: usize) -> Option<usize> {
+        let p = f.checked_sub(1)?;
+        (self.sequence[p] == self.sequence[f] && self.frame[p] + 1 == self.frame[f]).then_some(p)
+    }
 }
 
 /// Reads a tensor file and checks it against `sha256` (hex), the manifest's.

@@ -5,6 +5,7 @@
 mod conditions;
 mod frames;
 mod manifest;
+mod previous;
 mod sequence;
 mod stats;
 mod tensors;
@@ -16,6 +17,7 @@ pub use frames::{Frames, TrainingTensors};
 pub use manifest::{
     Normalization, ShardInfo, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest,
 };
+pub use previous::previous_state_map;
 pub use sequence::{Floor, Sequence, roundtrip_floor};
 pub use stats::Stats;
 pub(crate) use tensors::channels_first;

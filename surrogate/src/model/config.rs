@@ -16,6 +16,9 @@ pub const BODY_CHANNELS: usize = 6;
 /// template to the nearest point of the posed body (canonical, 3) and that point's outward
 /// normal (3).
 pub const NEAREST_CHANNELS: usize = 6;
+/// Channels the previous-state input adds: the garment's target map at the previous frame
+/// (the simulated one, noised, in training; the model's own output when predicting).
+pub const PREVIOUS_CHANNELS: usize = 3;
 /// Channels of its output: the velocity of the target map, or the map itself.
 pub const OUTPUT_CHANNELS: usize = 3;
 /// Width of the sinusoidal timestep features (Sana's and DiT's 256).
@@ -94,6 +97,12 @@ pub struct DitConfig {
     /// without the key has none).
     #[serde(default)]
     pub body_nearest: bool,
+    /// Whether every texel also sees the garment's previous state, 3 more input channels: an
+    /// autoregressive mode the paper does not have, for cloth whose swing the pose window
+    /// does not tell (docs/SURROGATE.md, "The autoregressive mode"). A model with it predicts
+    /// the frames of a sequence one after another.
+    #[serde(default)]
+    pub previous_state: bool,
 }
 
 impl Default for DitConfig {
@@ -116,6 +125,7 @@ impl Default for DitConfig {
             prediction: Prediction::Data,
             body_inputs: true,
             body_nearest: false,
+            previous_state: false,
         }
     }
 }
@@ -186,13 +196,24 @@ impl DitConfig {
         }
     }
 
-    /// Channels of the input image: noisy target, position map (plus the body inputs), mask.
-    pub fn input_channels(&self) -> usize {
-        INPUT_CHANNELS + self.body_channels()
+    /// Channels of the previous-state input: 0 or [`PREVIOUS_CHANNELS`].
+    pub fn previous_channels(&self) -> usize {
+        if self.previous_state {
+            PREVIOUS_CHANNELS
+        } else {
+            0
+        }
     }
 
-    /// Channels of the per-texel inputs that come with the template and the body: the
-    /// position map, then the body inputs when the model takes them.
+    /// Channels of the input image: noisy target, position map (plus the body inputs and the
+    /// previous state), mask.
+    pub fn input_channels(&self) -> usize {
+        INPUT_CHANNELS + self.body_channels() + self.previous_channels()
+    }
+
+    /// Channels of the per-texel inputs that come with the template, the body and the
+    /// garment's past: the position map, then the body inputs and the previous state when the
+    /// model takes them.
     pub fn texel_channels(&self) -> usize {
         self.input_channels() - 4
     }
@@ -283,5 +304,8 @@ mod tests {
         );
         c.body_inputs = true;
         assert_eq!(c.input_channels(), INPUT_CHANNELS + 12);
+        c.previous_state = true;
+        assert_eq!(c.input_channels(), INPUT_CHANNELS + 15);
+        assert_eq!(c.texel_channels(), 3 + 12 + 3);
     }
 }

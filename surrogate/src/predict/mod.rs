@@ -29,7 +29,7 @@ use sim::Material;
 use sim::obstacles::MeshSurface;
 use sim::recording::TemplateArrays;
 
-use crate::data::{ConditionLayout, body_input_maps, channels_first};
+use crate::data::{ConditionLayout, body_input_maps, channels_first, previous_state_map};
 use crate::error::{Error, Result, bad_value};
 use crate::flow::{Conditioned, euler, time_grid};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
@@ -180,6 +180,15 @@ pub struct Timing {
     pub guidance_s: f64,
     /// Conditions, bodies, noise, the final decode and the push-out.
     pub other_s: f64,
+}
+
+impl Timing {
+    /// Adds a batch's parts (not its wall time, which overlaps the others').
+    fn add(&mut self, batch: &Timing) {
+        self.network_s += batch.network_s;
+        self.guidance_s += batch.guidance_s;
+        self.other_s += batch.other_s;
+    }
 }
 
 /// A template made ready for a model: its geometry image at the model's resolution, its
@@ -349,6 +358,9 @@ impl<'a> Predictor<'a> {
                 motion.len().min(seq.betas.len())
             )));
         }
+        if self.trained.config.model.previous_state {
+            return self.predict_in_turn(garment, seq, frames, settings, on_frame);
+        }
         let lanes = rayon::current_num_threads().max(1);
         let mut timing = Timing::default();
         let all: Vec<usize> = frames.collect();
@@ -365,32 +377,52 @@ impl<'a> Predictor<'a> {
                 .zip(pools.iter_mut())
                 .collect::<Vec<_>>()
                 .into_par_iter()
-                .map(|(chunk, pool)| self.sample_batch(garment, seq, chunk, pool, settings))
+                .map(|(chunk, pool)| self.sample_batch(garment, seq, chunk, pool, settings, None))
                 .collect::<Result<Vec<_>>>()?;
             timing.wall_s += started.elapsed().as_secs_f64();
-            for (frames, t) in results {
-                timing.network_s += t.network_s;
-                timing.guidance_s += t.guidance_s;
-                timing.other_s += t.other_s;
-                for frame in &frames {
-                    // Finite weights and statistics can still overflow (a condition far outside
-                    // training); non-finite cloth is never handed on as a prediction.
-                    if !frame.garment.iter().flatten().all(|v| v.is_finite()) {
-                        return Err(Error::Invalid(format!(
-                            "frame {}: the model predicted a non-finite vertex (its weights or \
-                             statistics do not fit this input)",
-                            frame.index
-                        )));
-                    }
-                    on_frame(frame)?;
-                }
+            for (frames, t, _) in results {
+                timing.add(&t);
+                frames.iter().try_for_each(|f| hand_over(f, on_frame))?;
             }
         }
         Ok(timing)
     }
 
+    /// [`Self::predict`] for a model that takes the garment's previous state: one frame after
+    /// another, each given the map the model made for the frame before (the first frame of
+    /// `frames` is given none, as the first frame of a sequence is in training).
+    fn predict_in_turn(
+        &self,
+        garment: &PreparedGarment,
+        seq: &BodySequence,
+        frames: std::ops::Range<usize>,
+        settings: &Settings,
+        on_frame: &mut dyn FnMut(&PredictedFrame) -> Result<()>,
+    ) -> Result<Timing> {
+        let mut timing = Timing::default();
+        let mut surfaces = Vec::new();
+        let mut previous: Option<Vec<f32>> = None;
+        for k in frames {
+            let started = Instant::now();
+            let (predicted, t, map) = self.sample_batch(
+                garment,
+                seq,
+                &[k],
+                &mut surfaces,
+                settings,
+                previous.as_deref(),
+            )?;
+            timing.wall_s += started.elapsed().as_secs_f64();
+            timing.add(&t);
+            predicted.iter().try_for_each(|f| hand_over(f, on_frame))?;
+            previous = Some(map);
+        }
+        Ok(timing)
+    }
+
     /// The network's inputs for `frames` of `seq`, normalized as in training: what the tensors
-    /// of a recorded sequence hold for the same frames (tested).
+    /// of a recorded sequence hold for the same frames (tested). A previous-state model is
+    /// given no previous state for any of them (as the first frame of a sequence).
     pub fn network_inputs(
         &self,
         garment: &PreparedGarment,
@@ -404,7 +436,7 @@ impl<'a> Predictor<'a> {
             self.refit(&posed, frames, &mut surfaces)?;
         }
         Ok(self
-            .inputs_of(garment, &mut targets, seq, frames, &surfaces)?
+            .inputs_of(garment, &mut targets, seq, frames, &surfaces, None)?
             .1)
     }
 
@@ -430,7 +462,8 @@ impl<'a> Predictor<'a> {
     }
 
     /// The frames' bases and network inputs; `surfaces` are the frames' posed bodies when the
-    /// model takes the nearest-body inputs.
+    /// model takes the nearest-body inputs; `previous` is the normalized map before the first
+    /// frame when the model takes the previous state (then `frames` holds one frame).
     fn inputs_of(
         &self,
         garment: &PreparedGarment,
@@ -438,6 +471,7 @@ impl<'a> Predictor<'a> {
         seq: &BodySequence,
         frames: &[usize],
         surfaces: &[MeshSurface],
+        previous: Option<&[f32]>,
     ) -> Result<(Vec<FrameBase>, NetworkInputs)> {
         let data = &self.trained.data;
         let plane = data.resolution.pow(2);
@@ -477,6 +511,11 @@ impl<'a> Predictor<'a> {
                 bodies.normalize(&mut maps, plane);
                 inputs.texels.extend(maps);
             }
+            if model.previous_state {
+                inputs
+                    .texels
+                    .extend(previous_state_map(previous, &garment.mask, &stats.targets));
+            }
             let c = self
                 .layout
                 .vector(seq.motion, k, &seq.betas[k], &seq.material)?;
@@ -488,7 +527,8 @@ impl<'a> Predictor<'a> {
     }
 
     /// Samples one batch of frames and decodes it; `surfaces` are body surfaces to refit
-    /// (one per frame, grown as needed).
+    /// (one per frame, grown as needed); `previous` as in [`Self::inputs_of`]. Also returns
+    /// the sampled normalized maps `[B, 3, R, R]` (guidance included).
     fn sample_batch(
         &self,
         garment: &PreparedGarment,
@@ -496,7 +536,8 @@ impl<'a> Predictor<'a> {
         chunk: &[usize],
         surfaces: &mut Vec<MeshSurface>,
         settings: &Settings,
-    ) -> Result<(Vec<PredictedFrame>, Timing)> {
+        previous: Option<&[f32]>,
+    ) -> Result<(Vec<PredictedFrame>, Timing, Vec<f32>)> {
         let started = Instant::now();
         let data = &self.trained.data;
         let (r, dim) = (data.resolution, data.condition_dim);
@@ -512,8 +553,14 @@ impl<'a> Predictor<'a> {
         };
         self.refit(&posed[..surfaced], chunk, surfaces)?;
         let mut targets = garment.targets.clone();
-        let (bases, inputs) =
-            self.inputs_of(garment, &mut targets, seq, chunk, &surfaces[..surfaced])?;
+        let (bases, inputs) = self.inputs_of(
+            garment,
+            &mut targets,
+            seq,
+            chunk,
+            &surfaces[..surfaced],
+            previous,
+        )?;
         let device = &self.trained.device;
         let grid = time_grid(settings.steps, settings.shift);
         let targets_stats = &data.normalization.targets;
@@ -665,6 +712,23 @@ impl<'a> Predictor<'a> {
             })
             .collect::<Result<_>>()?;
         timing.other_s += finishing.elapsed().as_secs_f64();
-        Ok((frames, timing))
+        Ok((frames, timing, values))
     }
+}
+
+/// Hands a frame on, unless it holds a non-finite vertex: finite weights and statistics can
+/// still overflow (a condition far outside training), and non-finite cloth is never handed on
+/// as a prediction.
+fn hand_over(
+    frame: &PredictedFrame,
+    on_frame: &mut dyn FnMut(&PredictedFrame) -> Result<()>,
+) -> Result<()> {
+    if !frame.garment.iter().flatten().all(|v| v.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "frame {}: the model predicted a non-finite vertex (its weights or statistics do \
+             not fit this input)",
+            frame.index
+        )));
+    }
+    on_frame(frame)
 }

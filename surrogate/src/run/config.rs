@@ -87,6 +87,10 @@ pub struct TrainConfig {
     pub val_split: String,
     /// Steps between checkpoints (a multiple of `log_every`).
     pub checkpoint_every: usize,
+    /// With `model.previous_state`: the spread of the smooth noise laid on the previous
+    /// frame's simulated target map (normalized units, the targets' std is 1), standing in
+    /// for the model's own errors, which is what it gets at prediction.
+    pub previous_noise: f64,
 }
 
 impl Default for TrainConfig {
@@ -116,6 +120,7 @@ impl Default for TrainConfig {
             val_frames: 64,
             val_split: "test".into(),
             checkpoint_every: 100,
+            previous_noise: 0.3,
         }
     }
 }
@@ -188,6 +193,9 @@ impl TrainConfig {
                 &self.swa_start,
                 "must be 0 (off) or below steps",
             );
+        }
+        if !(self.previous_noise.is_finite() && (0.0..=10.0).contains(&self.previous_noise)) {
+            return bad("previous_noise", &self.previous_noise, "must be in [0, 10]");
         }
         if self.val_frames > 100_000 {
             return bad("val_frames", &self.val_frames, "must be at most 100000");

@@ -8,16 +8,20 @@ use burn::prelude::*;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::data::{Frames, TrainingTensors};
+use crate::data::{Frames, TrainingTensors, previous_state_map};
 use crate::flow;
 use crate::model::{DitConfig, Prediction};
-use crate::noise::{generator, normal};
+use crate::noise::{generator, normal, smooth_field};
 use crate::run::{Objective, TimeSampling, TrainConfig};
 
 /// Stream of the training batches.
 pub const TRAIN_STREAM: u64 = 1;
 /// Stream of the validation draws.
 pub const VALIDATION_STREAM: u64 = 2;
+
+/// Cells per side of the previous state's noise field: errors that span an eighth of the
+/// geometry image or more.
+const PREVIOUS_NOISE_CELLS: usize = 8;
 
 /// A time in (0, 1], always 1 for the regression objective.
 pub fn time(rng: &mut ChaCha8Rng, training: &TrainConfig) -> f32 {
@@ -44,6 +48,10 @@ pub struct Recipe {
     pub zero_outside: bool,
     /// Body channels the texel inputs include (the first ones of the tensors' body inputs).
     pub body_channels: usize,
+    /// With a previous-state model, the spread of the smooth noise laid on the previous
+    /// frame's target map (normalized units): at prediction that map is the model's own,
+    /// with its errors.
+    pub previous_noise: Option<f32>,
 }
 
 impl Recipe {
@@ -54,6 +62,9 @@ impl Recipe {
             prediction: model.prediction,
             zero_outside: training.zero_outside,
             body_channels: model.body_channels(),
+            previous_noise: model
+                .previous_state
+                .then_some(training.previous_noise as f32),
         }
     }
 }
@@ -65,8 +76,8 @@ pub struct Batch {
     pub size: usize,
     /// z_s = (1 - s) z0 + s eps, `[B, 3, R, R]`.
     pub noisy: Vec<f32>,
-    /// The texel inputs: position map, then the body inputs when the model takes them,
-    /// `[B, P, R, R]`.
+    /// The texel inputs: position map, then the body inputs and the previous state when the
+    /// model takes them, `[B, P, R, R]`.
     pub position: Vec<f32>,
     /// The loss masks, `[B, 1, R, R]`.
     pub mask: Vec<f32>,
@@ -95,6 +106,7 @@ impl Batch {
             prediction,
             zero_outside,
             body_channels,
+            previous_noise,
         } = recipe;
         let stored = tensors.manifest.body_channels();
         let r = tensors.resolution();
@@ -125,6 +137,20 @@ impl Batch {
                 let at = f * stored * plane;
                 b.position
                     .extend_from_slice(&split.bodies[at..at + body_channels * plane]);
+            }
+            if let Some(spread) = previous_noise {
+                let previous = split
+                    .previous(f)
+                    .map(|p| &split.targets[p * 3 * plane..(p + 1) * 3 * plane]);
+                let mut map =
+                    previous_state_map(previous, mask, &tensors.manifest.normalization.targets);
+                if previous.is_some() && spread > 0.0 {
+                    let noise = smooth_field(rng, 3, r, PREVIOUS_NOISE_CELLS);
+                    for (k, (v, n)) in map.iter_mut().zip(noise).enumerate() {
+                        *v += spread * n * mask[k % plane];
+                    }
+                }
+                b.position.extend(map);
             }
             let inside = &tensors.inside[g * plane..(g + 1) * plane];
             b.mask.extend_from_slice(mask);

@@ -198,6 +198,16 @@ pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<
             ),
         });
     }
+    if config.model.previous_state && tensors.manifest.every != 1 {
+        return Err(Error::Config {
+            path: "the training configuration".into(),
+            message: format!(
+                "model.previous_state needs every frame of a sequence, but the tensors in {} keep every {}th (remake them without --every)",
+                options.data.display(),
+                tensors.manifest.every
+            ),
+        });
+    }
     let run = &options.out;
     let config_path = run.join("config.toml");
     let mut extended_from = None;
