@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-30}"
 bin="${DIT_GARMENT_BIN:?set DIT_GARMENT_BIN to the dit-garment binary}"
-targets=(recording obj pattern npz spec scene_config bvh)
+targets=(recording obj pattern npz spec scene_config bvh model_run ensemble checkpoint)
 shared=../../shared/testdata
 mkdir -p "${targets[@]/#/corpus/}"
 seeds=$(mktemp -d)
@@ -48,12 +48,37 @@ np.savez_compressed(f"{out}/seed_compressed.npz", a=np.arange(12.0).reshape(3, 4
                     b=np.asfortranarray(np.ones((2, 3), np.float32)))
 PY
 
+# Model folders: a tiny network trained here for 10 steps on the tiny dataset (its files joined
+# by the separator line of fuzz_targets/folder.rs), as a run, an ensemble of two and a checkpoint
+# (with and without its checksums).
+tiny="$seeds/tiny"
+"$bin" synth --example-spec tiny >"$seeds/tiny.toml"
+"$bin" synth --spec "$seeds/tiny.toml" --out "$tiny/data" --quiet >/dev/null
+"$bin" dataset tensors "$tiny/data" --out "$tiny/tensors" --resolution 32 \
+  --target lbs_residual --quiet >/dev/null
+printf '[model]\nwidth = 8\ndepth = 1\nheads = 2\nmlp_ratio = 1.0\ncondition_tokens = 1\n[training]\nsteps = 10\nbatch = 1\nwarmup_steps = 1\nlog_every = 5\nval_every = 10\ncheckpoint_every = 10\nval_frames = 2\n' \
+  >"$seeds/tiny-model.toml"
+"$bin" train --data "$tiny/tensors" --out "$tiny/run" --config "$seeds/tiny-model.toml" \
+  --threads 1 --quiet >/dev/null
+join_files() {
+  python3 -c 'import sys; sys.stdout.buffer.write(b"\n@@next-file@@\n".join(open(p, "rb").read() for p in sys.argv[1:]))' "$@"
+}
+run_files=("$tiny/run/config.toml" "$tiny/run/tensors.json" "$tiny/run/model.safetensors")
+ckpt="$tiny/run/checkpoint-00000010"
+printf 'members = ["a", "b"]\n' >"$seeds/ensemble.toml"
+join_files "${run_files[@]}" >corpus/model_run/seed_tiny
+join_files "$seeds/ensemble.toml" "${run_files[@]}" "${run_files[@]}" >corpus/ensemble/seed_pair
+checkpoint_files=("$tiny/run/checkpoint.json" "$ckpt/config.toml" "$ckpt/state.json" \
+  "$ckpt/model.bpk" "$ckpt/optim.bpk" "$ckpt/ema.bpk" "$tiny/run/log.jsonl")
+join_files "${checkpoint_files[@]}" "$ckpt/checksums.json" >corpus/checkpoint/seed_checked
+join_files "${checkpoint_files[@]}" >corpus/checkpoint/seed_unchecked
+
 status=0
 printf '%-14s %12s %8s %8s  %s\n' target executions seconds corpus result
 for t in "${targets[@]}"; do
   log=$(mktemp)
   if cargo +nightly fuzz run "$t" "corpus/$t" -- \
-      -max_total_time="$seconds" -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+      -max_total_time="$seconds" -rss_limit_mb=2048 -max_len=262144 -print_final_stats=1 \
       >"$log" 2>&1; then
     result=ok
   else

@@ -9,6 +9,7 @@
 
 mod guidance;
 mod record;
+mod sampling;
 
 pub use guidance::{
     CONTACT_BAND_M, Clearance, ClearanceCache, Guidance, REUSE_WITHIN_M, clearances,
@@ -21,7 +22,6 @@ pub use record::{
 
 use std::time::Instant;
 
-use burn::prelude::*;
 use motions::{BodyModel, Motion, ShapedBody};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -31,9 +31,7 @@ use sim::recording::TemplateArrays;
 
 use crate::data::{ConditionLayout, body_input_maps, channels_first, previous_state_map};
 use crate::error::{Error, Result, bad_value};
-use crate::flow::{Conditioned, euler, time_grid};
 use crate::geometry::{FrameBase, FrameBody, GeometryImage, Targets};
-use crate::noise::{generator, normal};
 use crate::run::{Objective, TrainedModel};
 
 /// Euler steps by default (chosen from the steps sweep in docs/SURROGATE.md).
@@ -524,195 +522,6 @@ impl<'a> Predictor<'a> {
             inputs.conditions.extend(c);
         }
         Ok((bases, inputs))
-    }
-
-    /// Samples one batch of frames and decodes it; `surfaces` are body surfaces to refit
-    /// (one per frame, grown as needed); `previous` as in [`Self::inputs_of`]. Also returns
-    /// the sampled normalized maps `[B, 3, R, R]` (guidance included).
-    fn sample_batch(
-        &self,
-        garment: &PreparedGarment,
-        seq: &BodySequence,
-        chunk: &[usize],
-        surfaces: &mut Vec<MeshSurface>,
-        settings: &Settings,
-        previous: Option<&[f32]>,
-    ) -> Result<(Vec<PredictedFrame>, Timing, Vec<f32>)> {
-        let started = Instant::now();
-        let data = &self.trained.data;
-        let (r, dim) = (data.resolution, data.condition_dim);
-        let plane = r * r;
-        let posed = posed_bodies(self.body, seq, chunk)?;
-        let tests_after = settings.inside_test || settings.resolve_penetration;
-        let guided = (0..settings.steps).any(|k| settings.guidance.guides(k, settings.steps))
-            || (settings.guidance.weight > 0.0 && settings.guidance.refine > 0);
-        let surfaced = if tests_after || guided || self.trained.config.model.body_nearest {
-            posed.len()
-        } else {
-            0
-        };
-        self.refit(&posed[..surfaced], chunk, surfaces)?;
-        let mut targets = garment.targets.clone();
-        let (bases, inputs) = self.inputs_of(
-            garment,
-            &mut targets,
-            seq,
-            chunk,
-            &surfaces[..surfaced],
-            previous,
-        )?;
-        let device = &self.trained.device;
-        let grid = time_grid(settings.steps, settings.shift);
-        let targets_stats = &data.normalization.targets;
-        let band = settings.guidance.band_m;
-        let mut timing = Timing::default();
-        let b = chunk.len();
-        // Draw d's initial noise (draw 0 keeps the stream single-draw runs always used).
-        let noise_of = |d: usize| -> Vec<f32> {
-            let stream = if d == 0 {
-                NOISE_STREAM
-            } else {
-                EXTRA_DRAW_STREAMS + d as u64
-            };
-            let mut noise = Vec::with_capacity(b * 3 * plane);
-            for &k in chunk {
-                let step = match settings.noise {
-                    Noise::Shared => 0,
-                    Noise::PerFrame => k as u64 + 1,
-                };
-                let mut rng = generator(settings.seed, stream, step);
-                noise.extend((0..3 * plane).map(|_| normal(&mut rng)));
-            }
-            noise
-        };
-        let surfaces = &surfaces[..surfaced];
-        let repeat =
-            |one: &[f32]| -> Vec<f32> { (0..b).flat_map(|_| one.iter().copied()).collect() };
-        let tensor = |values: &[f32]| Tensor::<1>::from_floats(values, device);
-        let texel_channels = self.trained.config.model.texel_channels();
-        let field = Conditioned {
-            model: &self.trained.model,
-            members: &self.trained.members,
-            position: tensor(&inputs.texels).reshape([b, texel_channels, r, r]),
-            mask: tensor(&repeat(&garment.mask)).reshape([b, 1, r, r]),
-            conditions: tensor(&inputs.conditions).reshape([b, dim]),
-            zero_outside: self.trained.config.training.zero_outside,
-        };
-        timing.other_s += started.elapsed().as_secs_f64();
-
-        let sampling = Instant::now();
-        let image = &garment.image;
-        let spread = &garment.spread;
-        // Each frame's clearances from its last query: a refinement pass (and the final
-        // inside test) asks again only for the vertices that moved.
-        let mut known = vec![ClearanceCache::default(); b];
-        // The guidance term of normalized maps `values` at `scale`: the penalty's gradient of
-        // each frame, spread to its texels and divided by the targets' std.
-        let correction_of =
-            |values: &[f32], scale: f64, known: &mut [ClearanceCache]| -> Result<Vec<f32>> {
-                let mut correction = vec![0.0f32; values.len()];
-                for ((z, out), ((base, surface), cache)) in values
-                    .chunks(3 * plane)
-                    .zip(correction.chunks_mut(3 * plane))
-                    .zip(bases.iter().zip(surfaces).zip(known.iter_mut()))
-                {
-                    let map = targets_stats.denormalize::<3>(z);
-                    let world = base.decode(&image.read(&map)?);
-                    let gradient: Vec<[f64; 3]> =
-                        penalty_gradient(cache.clearances(surface, &world, band), band)
-                            .into_iter()
-                            .map(|g| base.gradient_to_target(g))
-                            .collect();
-                    let spread_image = image.read_transpose(&gradient)?;
-                    for (c, out) in out.chunks_mut(plane).enumerate() {
-                        let factor = scale / targets_stats.std[c];
-                        for ((o, g), w) in out.iter_mut().zip(&spread_image).zip(spread) {
-                            *o = (factor * g[c] * w) as f32;
-                        }
-                    }
-                }
-                Ok(correction)
-            };
-        // The sampler's callback answers "no guidance" on an error; the first one is kept
-        // here and ends the prediction after the draw.
-        let mut failure = None;
-        let mut values = vec![0.0f32; b * 3 * plane];
-        for d in 0..settings.draws {
-            let noise = tensor(&noise_of(d)).reshape([b, 3, r, r]);
-            let x = euler(&field, noise, &grid, &mut |k, s, x0_hat| {
-                if failure.is_some() || !settings.guidance.guides(k, settings.steps) {
-                    return None;
-                }
-                let t = Instant::now();
-                let ds = s - grid[k + 1];
-                let scale = settings.guidance.weight.min(1.0 / ds);
-                let correction = x0_hat
-                    .clone()
-                    .try_into_vec_as::<f32>()
-                    .map_err(|e| Error::Invalid(format!("the sampler's estimate: {e:?}")))
-                    .and_then(|values| correction_of(&values, scale, &mut known));
-                timing.guidance_s += t.elapsed().as_secs_f64();
-                match correction {
-                    Ok(c) => Some(tensor(&c).reshape([b, 3, r, r])),
-                    Err(e) => {
-                        failure = Some(e);
-                        None
-                    }
-                }
-            });
-            if let Some(e) = failure.take() {
-                return Err(e);
-            }
-            let draw: Vec<f32> = x
-                .try_into_vec_as()
-                .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))?;
-            for (v, x) in values.iter_mut().zip(draw) {
-                *v += x / settings.draws as f32;
-            }
-        }
-        // Refinement passes on the sample itself: each moves every vertex in the band by its
-        // depth below the band's edge, as far as the texels carry it.
-        if settings.guidance.weight > 0.0 {
-            for _ in 0..settings.guidance.refine {
-                let t = Instant::now();
-                let correction = correction_of(&values, 1.0, &mut known)?;
-                values.iter_mut().zip(correction).for_each(|(v, c)| *v -= c);
-                timing.guidance_s += t.elapsed().as_secs_f64();
-            }
-        }
-        timing.network_s += sampling.elapsed().as_secs_f64() - timing.guidance_s;
-
-        let finishing = Instant::now();
-        let frames = values
-            .chunks(3 * plane)
-            .zip(&bases)
-            .zip(chunk.iter().zip(posed))
-            .zip(known.iter_mut())
-            .enumerate()
-            .map(|(i, (((z, base), (&index, body)), cache))| {
-                let map = targets_stats.denormalize::<3>(z);
-                let mut world = base.decode(&image.read(&map)?);
-                let (mut inside, mut max_penetration_m, mut pushed) = (None, None, 0);
-                if tests_after {
-                    let c = cache.clearances(&surfaces[i], &world, band);
-                    let (n, deepest) = penetration(c);
-                    (inside, max_penetration_m) = (Some(n), Some(deepest));
-                    if settings.resolve_penetration {
-                        pushed = push_out(&mut world, c, band);
-                    }
-                }
-                Ok(PredictedFrame {
-                    index,
-                    garment: world,
-                    body,
-                    inside,
-                    max_penetration_m,
-                    pushed,
-                })
-            })
-            .collect::<Result<_>>()?;
-        timing.other_s += finishing.elapsed().as_secs_f64();
-        Ok((frames, timing, values))
     }
 }
 

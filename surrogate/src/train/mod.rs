@@ -21,12 +21,12 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use batch::{Batch, Recipe, validation_batches};
-pub use checkpoint::RunState;
+pub use checkpoint::{Loaded, RunState, load as load_checkpoint};
 use files::write_atomic;
 pub use optim::{average_decay, clip_global_norm, ema_decay, update_ema};
 pub use reference::save_reference;
 
-use crate::data::TrainingTensors;
+use crate::data::{Frames, TrainingTensors};
 use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
 use crate::noise::generator;
@@ -179,198 +179,327 @@ fn plot(run: &Path, log: &[LogLine]) -> Result<()> {
     Ok(write_atomic(&path, &bytes)?)
 }
 
-/// Trains (or resumes) a run; `progress` hears every step and log line.
+/// Trains (or resumes) a run; `progress` hears every step and log line. Stages: the checks
+/// (nothing is written before they pass), the run's files, the data, the network (fresh or
+/// from the last checkpoint), the steps with their log lines and checkpoints, the outputs.
 pub fn train(options: &TrainOptions, progress: &mut dyn FnMut(Event)) -> Result<Summary> {
     let tensors = TrainingTensors::open(&options.data)?;
     let mut config = options.config.clone();
     config.fit_to(&tensors);
     config.validate()?;
+    check_tensors(&config, &tensors, &options.data)?;
+    let extended_from = check_resume(options, &config)?;
+    write_run_files(&options.out, &config, &tensors)?;
+    let data = TrainingData::new(tensors, &options.data, &config)?;
+    let device = options.device.clone().autodiff();
+    device.seed(config.training.seed);
+    let loaded = if options.resume {
+        checkpoint::load(&options.out, &config, &device)?
+    } else {
+        None
+    };
+    let net = loaded.unwrap_or_else(|| fresh(&config, &device));
+    let mut log = read_log(&options.out, net.state.step)?;
+    progress(Event::Started {
+        step: net.state.step,
+        steps: config.training.steps,
+        extended_from,
+        parameters: net.model.parameters(),
+        train_frames: data.train.len(),
+        val_frames: data.val_batches.iter().map(|b| b.size).sum(),
+        val_split: data.val_split.clone(),
+    });
+    let (net, saved_at) = run_steps(options, &config, &data, net, &mut log, &device, progress)?;
+    finish(options, &config, &data, &net, &log, saved_at)
+}
+
+/// Refuses tensors that lack what the model takes: body channels, every frame for the
+/// previous state.
+fn check_tensors(config: &RunConfig, tensors: &TrainingTensors, data: &Path) -> Result<()> {
     let (wanted, stored) = (
         config.model.body_channels(),
         tensors.manifest.body_channels(),
     );
+    let refuse = |message: String| {
+        Err(Error::Config {
+            path: "the training configuration".into(),
+            message,
+        })
+    };
     if wanted > stored {
-        return Err(Error::Config {
-            path: "the training configuration".into(),
-            message: format!(
-                "the model takes {wanted} body input channels (model.body_inputs, model.body_nearest), but the tensors in {} have {stored} (body inputs need the lbs_residual target, the nearest-body ones `dataset tensors --body-nearest`): remake them or turn the keys off",
-                options.data.display()
-            ),
-        });
-    }
-    if config.model.previous_state && tensors.manifest.every != 1 {
-        return Err(Error::Config {
-            path: "the training configuration".into(),
-            message: format!(
-                "model.previous_state needs every frame of a sequence, but the tensors in {} keep every {}th (remake them without --every)",
-                options.data.display(),
-                tensors.manifest.every
-            ),
-        });
-    }
-    let run = &options.out;
-    let config_path = run.join("config.toml");
-    let mut extended_from = None;
-    if options.resume {
-        if config_path.exists() {
-            let saved = RunConfig::load_saved(&config_path)?;
-            if config.training.steps > saved.training.steps {
-                extended_from = Some(saved.training.steps);
-            }
-            if let Some(d) = config.resume_difference(&saved) {
-                return Err(file_error(
-                    &config_path,
-                    format!(
-                        "the run was started with another configuration ({d}); resume without changing it"
-                    ),
-                ));
-            }
-        }
-        // Refused here, before a file is written, if it cannot continue.
-        checkpoint::resumable(run, &config)?;
-    } else if config_path.exists() || run.join("checkpoint.json").exists() {
-        return Err(file_error(
-            run,
-            "already holds a training run (pass --resume to continue it, or choose a new folder)",
+        return refuse(format!(
+            "the model takes {wanted} body input channels (model.body_inputs, model.body_nearest), but the tensors in {} have {stored} (body inputs need the lbs_residual target, the nearest-body ones `dataset tensors --body-nearest`): remake them or turn the keys off",
+            data.display()
         ));
     }
-    std::fs::create_dir_all(run).map_err(|e| file_error(run, e))?;
-    write_atomic(&config_path, config.to_toml().as_bytes())?;
-    // What sampling needs of the data (normalization, condition layout, target, frames).
-    let manifest = serde_json::to_vec_pretty(&tensors.manifest).map_err(|e| file_error(run, e))?;
-    write_atomic(&run.join(TENSORS_MANIFEST), &manifest)?;
-
-    let t = &config.training;
-    let train_frames = tensors.frames("train")?;
-    if train_frames.is_empty() {
-        return Err(file_error(&options.data, "has no training frames"));
+    if config.model.previous_state && tensors.manifest.every != 1 {
+        return refuse(format!(
+            "model.previous_state needs every frame of a sequence, but the tensors in {} keep every {}th (remake them without --every)",
+            data.display(),
+            tensors.manifest.every
+        ));
     }
-    let val_split = held_out_split(&tensors, &t.val_split);
-    let val_frames = match &val_split {
-        Some(split) => tensors.frames(split)?,
-        None => crate::data::Frames::default(),
-    };
-    let recipe = Recipe::new(&config.model, t);
-    let val_batches = validation_batches(&tensors, &val_frames, t, recipe);
+    Ok(())
+}
 
-    let plain = &options.device;
-    let device = plain.clone().autodiff();
-    device.seed(t.seed);
-    let loaded = if options.resume {
-        checkpoint::load(run, &config, &device)?
-    } else {
-        None
-    };
-    let (mut model, mut optim, mut ema, mut state) = match loaded {
-        Some(l) => (l.model, l.optim, l.ema, l.state),
-        None => {
-            let mut model = Dit::new(&config.model, &device);
-            if t.zero_init {
-                model = model.zero_output_layers();
-            }
-            let ema = model.valid();
-            let state = RunState {
-                step: 0,
-                wall_s: 0.0,
-                best_val_loss: None,
-            };
-            (model, checkpoint::optimizer(t), ema, state)
+/// Whether the run folder may be trained into: a new run into a folder without one, a resume
+/// into a run it can continue (refused here, before a file is written, if it cannot).
+/// Returns the run's steps before this resume extended them, if it does.
+fn check_resume(options: &TrainOptions, config: &RunConfig) -> Result<Option<usize>> {
+    let run = &options.out;
+    let config_path = run.join("config.toml");
+    if !options.resume {
+        if config_path.exists() || run.join("checkpoint.json").exists() {
+            return Err(file_error(
+                run,
+                "already holds a training run (pass --resume to continue it, or choose a new folder)",
+            ));
         }
-    };
-    let mut log = read_log(run, state.step)?;
-    let parameters = model.parameters();
-    progress(Event::Started {
-        step: state.step,
-        steps: t.steps,
-        extended_from,
-        parameters,
-        train_frames: train_frames.len(),
-        val_frames: val_batches.iter().map(|b| b.size).sum(),
-        val_split: val_split.clone(),
-    });
+        return Ok(None);
+    }
+    let mut extended_from = None;
+    if config_path.exists() {
+        let saved = RunConfig::load_saved(&config_path)?;
+        if config.training.steps > saved.training.steps {
+            extended_from = Some(saved.training.steps);
+        }
+        if let Some(d) = config.resume_difference(&saved) {
+            return Err(file_error(
+                &config_path,
+                format!(
+                    "the run was started with another configuration ({d}); resume without changing it"
+                ),
+            ));
+        }
+    }
+    checkpoint::resumable(run, config)?;
+    Ok(extended_from)
+}
 
+/// `config.toml` and what sampling needs of the data (`tensors.json`: normalization,
+/// condition layout, target, frames).
+fn write_run_files(run: &Path, config: &RunConfig, tensors: &TrainingTensors) -> Result<()> {
+    std::fs::create_dir_all(run).map_err(|e| file_error(run, e))?;
+    write_atomic(&run.join("config.toml"), config.to_toml().as_bytes())?;
+    let manifest = serde_json::to_vec_pretty(&tensors.manifest).map_err(|e| file_error(run, e))?;
+    Ok(write_atomic(&run.join(TENSORS_MANIFEST), &manifest)?)
+}
+
+/// The frames a run trains and validates on, and how batches are made of them.
+struct TrainingData {
+    tensors: TrainingTensors,
+    train: Frames,
+    val: Frames,
+    val_split: Option<String>,
+    val_batches: Vec<Batch>,
+    recipe: Recipe,
+}
+
+impl TrainingData {
+    fn new(tensors: TrainingTensors, dir: &Path, config: &RunConfig) -> Result<Self> {
+        let t = &config.training;
+        let train = tensors.frames("train")?;
+        if train.is_empty() {
+            return Err(file_error(dir, "has no training frames"));
+        }
+        let val_split = held_out_split(&tensors, &t.val_split);
+        let val = match &val_split {
+            Some(split) => tensors.frames(split)?,
+            None => Frames::default(),
+        };
+        let recipe = Recipe::new(&config.model, t);
+        let val_batches = validation_batches(&tensors, &val, t, recipe);
+        Ok(Self {
+            tensors,
+            train,
+            val,
+            val_split,
+            val_batches,
+            recipe,
+        })
+    }
+}
+
+/// A new network (output layers at zero where configured), its EMA, a fresh optimizer.
+fn fresh(config: &RunConfig, device: &Device) -> Loaded {
+    let mut model = Dit::new(&config.model, device);
+    if config.training.zero_init {
+        model = model.zero_output_layers();
+    }
+    Loaded {
+        ema: model.valid(),
+        model,
+        optim: checkpoint::optimizer(&config.training),
+        state: RunState {
+            step: 0,
+            wall_s: 0.0,
+            best_val_loss: None,
+        },
+    }
+}
+
+/// Sums over the steps since the last log line.
+struct Interval {
+    loss: f64,
+    grad_norm: f64,
+    steps: usize,
+    started: Instant,
+}
+
+impl Interval {
+    fn new() -> Self {
+        Self {
+            loss: 0.0,
+            grad_norm: 0.0,
+            steps: 0,
+            started: Instant::now(),
+        }
+    }
+}
+
+/// The optimizer steps from the last one done to the run's end (or the session's time
+/// limit), with a log line every `log_every` steps (the EMA's validation loss every
+/// `val_every`) and a checkpoint every `checkpoint_every`. Returns the network and the step
+/// of its last checkpoint.
+fn run_steps(
+    options: &TrainOptions,
+    config: &RunConfig,
+    data: &TrainingData,
+    mut net: Loaded,
+    log: &mut Vec<LogLine>,
+    device: &Device,
+    progress: &mut dyn FnMut(Event),
+) -> Result<(Loaded, usize)> {
+    let (t, run) = (&config.training, &options.out);
     let session = Instant::now();
-    let wall_before = state.wall_s;
-    let (mut loss_sum, mut norm_sum, mut count, mut interval) = (0.0, 0.0, 0usize, Instant::now());
-    let mut saved_at = state.step;
-    while state.step < t.steps {
-        let step = state.step;
-        let batch = Batch::training(&tensors, &train_frames, t, recipe, step);
-        let (noisy, position, mask, time, conditions) = batch.inputs(&device);
-        let loss = batch.loss(model.forward(noisy, position, mask, time, conditions));
+    let wall_before = net.state.wall_s;
+    let mut interval = Interval::new();
+    let mut saved_at = net.state.step;
+    while net.state.step < t.steps {
+        let step = net.state.step;
+        let batch = Batch::training(&data.tensors, &data.train, t, data.recipe, step);
+        let (noisy, position, mask, time, conditions) = batch.inputs(device);
+        let loss = batch.loss(net.model.forward(noisy, position, mask, time, conditions));
         let loss_value = f64::from(loss.clone().into_scalar::<f32>());
         if !loss_value.is_finite() {
             return Err(Error::Diverged {
                 step: step + 1,
                 loss: loss_value,
-                config: config_path.display().to_string(),
+                config: run.join("config.toml").display().to_string(),
             });
         }
-        let mut grads = GradientsParams::from_grads(loss.backward(), &model);
-        let grad_norm = clip_global_norm(&model, &mut grads, t.grad_clip_norm);
+        let mut grads = GradientsParams::from_grads(loss.backward(), &net.model);
+        let grad_norm = clip_global_norm(&net.model, &mut grads, t.grad_clip_norm);
         let lr = t.lr_at(step);
-        model = optim.step(lr, model, grads);
-        ema = update_ema(ema, &model, average_decay(t, step));
-        state.step += 1;
-        state.wall_s = wall_before + session.elapsed().as_secs_f64();
-        (loss_sum, norm_sum, count) = (loss_sum + loss_value, norm_sum + grad_norm, count + 1);
+        net.model = net.optim.step(lr, net.model, grads);
+        net.ema = update_ema(net.ema, &net.model, average_decay(t, step));
+        net.state.step += 1;
+        net.state.wall_s = wall_before + session.elapsed().as_secs_f64();
+        interval.loss += loss_value;
+        interval.grad_norm += grad_norm;
+        interval.steps += 1;
+        let done = net.state.step;
         progress(Event::Step {
-            step: state.step,
+            step: done,
             loss: loss_value,
         });
-        let done = state.step;
-        if done % t.log_every == 0 || done == t.steps {
-            let val_loss = (done % t.val_every == 0 || done == t.steps)
-                .then(|| validation_loss(&ema, &val_batches, plain))
-                .flatten();
-            if let Some(v) = val_loss {
-                state.best_val_loss = Some(state.best_val_loss.map_or(v, |b: f64| b.min(v)));
-            }
-            let line = LogLine {
-                step: done,
-                loss: loss_sum / count as f64,
-                lr,
-                grad_norm: norm_sum / count as f64,
-                samples_per_s: (count * t.batch) as f64
-                    / interval.elapsed().as_secs_f64().max(1e-9),
-                wall_s: state.wall_s,
-                val_loss,
-            };
-            log.push(line.clone());
-            progress(Event::Log(line));
-            (loss_sum, norm_sum, count, interval) = (0.0, 0.0, 0, Instant::now());
-            if done % t.checkpoint_every == 0 {
-                // The log first: a run killed between the two resumes with its whole history
-                // (lines past the checkpoint are dropped on resume).
-                write_log(run, &log)?;
-                plot(run, &log)?;
-                checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
-                saved_at = done;
-            }
-            let out_of_time = options
-                .minutes
-                .is_some_and(|m| session.elapsed().as_secs_f64() >= m * 60.0);
-            if out_of_time {
-                break;
-            }
+        if done % t.log_every != 0 && done != t.steps {
+            continue;
+        }
+        let line = log_line(
+            &mut net.state,
+            &interval,
+            lr,
+            t,
+            data,
+            &net.ema,
+            &options.device,
+        );
+        log.push(line.clone());
+        progress(Event::Log(line));
+        interval = Interval::new();
+        if done % t.checkpoint_every == 0 {
+            // The log first: a run killed between the two resumes with its whole history
+            // (lines past the checkpoint are dropped on resume).
+            write_log(run, log)?;
+            plot(run, log)?;
+            checkpoint::save(run, config, &net.model, &net.optim, &net.ema, &net.state)?;
+            saved_at = done;
+        }
+        let out_of_time = options
+            .minutes
+            .is_some_and(|m| session.elapsed().as_secs_f64() >= m * 60.0);
+        if out_of_time {
+            break;
         }
     }
-    write_log(run, &log)?;
-    plot(run, &log)?;
+    Ok((net, saved_at))
+}
+
+/// The log line of the steps in `interval`, the EMA's validation loss with it where due (and
+/// the best one kept in `state`).
+fn log_line(
+    state: &mut RunState,
+    interval: &Interval,
+    lr: f64,
+    t: &TrainConfig,
+    data: &TrainingData,
+    ema: &Dit,
+    device: &Device,
+) -> LogLine {
+    let done = state.step;
+    let val_loss = (done % t.val_every == 0 || done == t.steps)
+        .then(|| validation_loss(ema, &data.val_batches, device))
+        .flatten();
+    if let Some(v) = val_loss {
+        state.best_val_loss = Some(state.best_val_loss.map_or(v, |b: f64| b.min(v)));
+    }
+    let steps = interval.steps as f64;
+    LogLine {
+        step: done,
+        loss: interval.loss / steps,
+        lr,
+        grad_norm: interval.grad_norm / steps,
+        samples_per_s: (interval.steps * t.batch) as f64
+            / interval.started.elapsed().as_secs_f64().max(1e-9),
+        wall_s: state.wall_s,
+        val_loss,
+    }
+}
+
+/// The run's outputs: the log and its plot, a last checkpoint where the steps ended between
+/// two, the EMA weights with their provenance, the reference batch and the summary.
+fn finish(
+    options: &TrainOptions,
+    config: &RunConfig,
+    data: &TrainingData,
+    net: &Loaded,
+    log: &[LogLine],
+    saved_at: usize,
+) -> Result<Summary> {
+    let (t, run) = (&config.training, &options.out);
+    let state = &net.state;
+    write_log(run, log)?;
+    plot(run, log)?;
     if saved_at != state.step {
-        checkpoint::save(run, &config, &model, &optim, &ema, &state)?;
+        checkpoint::save(run, config, &net.model, &net.optim, &net.ema, state)?;
     }
     let provenance = Provenance {
-        config_sha256: files::sha256_file(&config_path)?.0,
+        config_sha256: files::sha256_file(&run.join("config.toml"))?.0,
         dataset_manifest_sha256: files::sha256_file(&options.data.join("manifest.json"))?.0,
         commit: COMMIT.to_string(),
     };
-    save_weights(&ema, &run.join("model.safetensors"), &provenance)?;
-    let reference = reference_batch(&tensors, &train_frames, &val_frames, t, recipe);
-    save_reference(&ema, &reference, &run.join("reference.safetensors"), plain)?;
+    save_weights(&net.ema, &run.join("model.safetensors"), &provenance)?;
+    let reference = reference_batch(&data.tensors, &data.train, &data.val, t, data.recipe);
+    save_reference(
+        &net.ema,
+        &reference,
+        &run.join("reference.safetensors"),
+        &options.device,
+    )?;
     let summary = Summary {
         steps: state.step,
-        parameters,
+        parameters: net.model.parameters(),
         final_loss: log.last().map_or(f64::NAN, |l| l.loss),
         best_val_loss: state.best_val_loss,
         wall_s: state.wall_s,
@@ -401,8 +530,8 @@ fn held_out_split(tensors: &TrainingTensors, preferred: &str) -> Option<String> 
 /// input of `reference.safetensors`.
 fn reference_batch(
     tensors: &TrainingTensors,
-    train: &crate::data::Frames,
-    val: &crate::data::Frames,
+    train: &Frames,
+    val: &Frames,
     t: &TrainConfig,
     recipe: Recipe,
 ) -> Batch {

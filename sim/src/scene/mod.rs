@@ -7,6 +7,8 @@
 //! that frame for the settle frames, then plays the motion. Body keyframes are 30 fps poses;
 //! every substep interpolates them.
 
+mod simulation;
+
 use std::time::Instant;
 
 use motions::{BlendIn, BodyModel, FramePose, Motion, PosedBody, canonical_a_pose};
@@ -15,10 +17,11 @@ use serde::{Deserialize, Serialize};
 use crate::cloth::{ClothMesh, ClothState, Vec3, closest_on_triangle};
 use crate::config::SceneConfig;
 use crate::error::{Error, Result};
-use crate::obstacles::{AnimatedMesh, Obstacles, Plane};
+use crate::obstacles::{AnimatedMesh, Obstacles};
 use crate::params::{Material, SolverParams};
 use crate::recording::{FrameRecord, FrameStats, SequenceMeta, UNITS};
 use crate::solver::{ClothSetup, FrameReport, Solver, StageTimes};
+use simulation::Simulation;
 
 /// Output frame rate, frames per second.
 pub const FPS: f64 = 30.0;
@@ -367,148 +370,25 @@ impl Scene {
     }
 
     /// Runs the scene, handing every output frame (frame 0 = the template) to `on_frame`.
+    /// Stages: the start (cloth at rest on the first frame's body), then per frame the body
+    /// posed, the frame advanced (again, finer, where a limb swept the cloth inside) and
+    /// handed on, then the summary.
     pub fn run(
         &self,
         model: &BodyModel,
         mut on_frame: impl FnMut(&FrameOutput) -> Result<()>,
     ) -> Result<RunSummary> {
         let started = Instant::now();
-        let blend = self.blend();
-        let motion = self.body_motion();
         let frames = self.num_frames();
-        let target = model.shape(&self.betas)?;
-        let mut posing = 0.0;
-        let mut pose_frame = |k: usize| -> Result<(Vec<f64>, PosedBody)> {
-            let t = Instant::now();
-            let betas = self.frame_betas(k);
-            let shaped = if k >= blend.blend_frames {
-                target.clone()
-            } else {
-                model.shape(&betas)?
-            };
-            let posed = model.pose(&shaped, &motion.frames[k])?;
-            posing += t.elapsed().as_secs_f64();
-            Ok((betas, posed))
-        };
-
-        let transl = motion.frames[0].transl;
-        let start: Vec<Vec3> = self
-            .template
-            .iter()
-            .map(|p| Vec3::new(p[0] + transl[0], p[1] + transl[1], p[2] + transl[2]))
-            .collect();
-        let mesh = ClothMesh::new(to_vec3(&self.template), self.triangles.clone())?;
-        let mut solver = Solver::new(
-            cloth_setup(mesh.clone(), self.config.material, &self.attachments),
-            self.config.solver,
-            1.0 / FPS,
-        )?;
-        let mut state = ClothState::at_rest(start);
-
-        let (mut betas, mut body) = pose_frame(0)?;
-        solver.set_attachment_targets(&attachment_targets(
-            &self.attachments,
-            &body.vertices,
-            model.faces(),
-        ));
-        let body_vertices = to_vec3(&body.vertices);
-        let floor = body_vertices.iter().fold(f64::INFINITY, |a, p| a.min(p.y));
-        let mut animated = AnimatedMesh::new(&body_vertices, model.faces(), self.config.friction)?;
-        let mut stats = self.measure(
-            &mesh,
-            &state,
-            &solver,
-            &mut animated,
-            0,
-            FrameReport::default(),
-            0.0,
-        );
-        let mut garment: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
-        on_frame(&FrameOutput {
-            index: 0,
-            garment: &garment,
-            pose: &motion.frames[0],
-            betas: &betas,
-            body: &body,
-            stats: &stats,
-        })?;
-
-        let mut obstacles = Obstacles {
-            ground: Some(Plane::ground(floor, self.config.friction)),
-            ..Obstacles::body(animated)
-        };
-        let mut summary = RunSummary {
-            vertices: mesh.num_vertices(),
-            finite: true,
-            ..RunSummary::default()
-        };
-        let mut steps = 0;
-        let mut iterations = 0;
-        let mut previous = body_vertices;
-        accumulate(&mut summary, &stats);
+        let (mut sim, betas, body) = Simulation::start(self, model)?;
+        on_frame(&sim.output(0, &betas, &body))?;
         for k in 1..frames {
             let frame_started = Instant::now();
-            (betas, body) = pose_frame(k)?;
-            let next = to_vec3(&body.vertices);
-            let t0 = (k - 1) as f64 / FPS;
-            let body_obstacle = scene_body(&mut obstacles)?;
-            body_obstacle.set_keyframes(&previous, &next, t0, t0 + 1.0 / FPS)?;
-            solver.set_attachment_targets(&attachment_targets(
-                &self.attachments,
-                &body.vertices,
-                model.faces(),
-            ));
-            let deepest_before = stats.max_penetration_m;
-            let jump = self.config.solver.max_penetration_jump;
-            let saved = state.clone();
-            let mut report = solver.advance_frame(&mut state, &mut obstacles, t0, k)?;
-            // The attempt kept so far when the frame took the cloth too deep (the shallowest).
-            let mut kept: Option<(ClothState, FrameStats)> = None;
-            loop {
-                steps += report.steps;
-                iterations += report.iterations;
-                summary.deep_contacts += report.deep_contacts;
-                let wall = frame_started.elapsed().as_secs_f64();
-                let body_obstacle = scene_body(&mut obstacles)?;
-                stats = self.measure(&mesh, &state, &solver, body_obstacle, k, report, wall);
-                let depth = stats.max_penetration_m;
-                if let Some(shallower) = kept.take_if(|(_, s)| s.max_penetration_m <= depth) {
-                    // Finer steps did not help: keep the shallower attempt and stop.
-                    (state, stats) = shallower;
-                    break;
-                }
-                let deepened = jump > 0.0 && depth - deepest_before > jump;
-                if !deepened || report.retries >= self.config.solver.max_retries {
-                    break;
-                }
-                // A limb swept the cloth inside within this frame: run it again, finer.
-                kept = Some((std::mem::replace(&mut state, saved.clone()), stats));
-                let finer = report.retries + 1;
-                report = solver.advance_frame_from(&mut state, &mut obstacles, t0, k, finer)?;
-            }
-            // The last attempt's retry count (any frame-level retry makes it positive).
-            summary.retried_frames += (report.retries > 0) as usize;
-            accumulate(&mut summary, &stats);
-            for (g, p) in garment.iter_mut().zip(&state.positions) {
-                *g = [p.x, p.y, p.z];
-            }
-            on_frame(&FrameOutput {
-                index: k,
-                garment: &garment,
-                pose: &motion.frames[k],
-                betas: &betas,
-                body: &body,
-                stats: &stats,
-            })?;
-            previous = next;
+            let (betas, body) = sim.pose(k)?;
+            sim.advance(k, &body, frame_started)?;
+            on_frame(&sim.output(k, &betas, &body))?;
         }
-        summary.frames = frames;
-        summary.wall_s = started.elapsed().as_secs_f64();
-        summary.frames_per_s = frames as f64 / summary.wall_s;
-        summary.mean_iterations = iterations as f64 / steps.max(1) as f64;
-        summary.stages = solver.take_times();
-        summary.posing_s = posing;
-        Ok(summary)
+        Ok(sim.finish(frames, started))
     }
 
     #[allow(clippy::too_many_arguments)]
