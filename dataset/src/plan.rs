@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::spec::{DatasetSpec, MAX_PLANNED_SEQUENCES, MaterialRanges, Tag};
+use super::spec::{DatasetSpec, MAX_PLANNED_SEQUENCES, MaterialRanges, SplitSpec, Tag};
 use super::split::Split;
 use crate::error::{Error, Result};
 use sim::Material;
@@ -146,13 +146,36 @@ pub fn expand_motions(spec: &DatasetSpec) -> Result<Vec<(String, Tag)>> {
     Ok(out)
 }
 
-/// Every sequence of the dataset, training first, then the test sets.
+/// Every sequence of the dataset, training first, then the test sets, then the test grid.
 ///
 /// A plan of more than [`MAX_PLANNED_SEQUENCES`] sequences is refused before it is built.
 pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<PlannedSequence>> {
+    check_size(spec, motions)?;
+    let planner = Planner::new(spec, motions);
+    let mut out = planner.training();
+    for set in HeldOut::sets(&spec.splits) {
+        out.extend(planner.held_out(set));
+    }
+    out.extend(planner.test_grid());
+    Ok(out)
+}
+
+/// Refuses a plan of more than [`MAX_PLANNED_SEQUENCES`] sequences, counted without
+/// overflow before any is made.
+fn check_size(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<()> {
     let s = &spec.sequence;
-    let train_motions = motions.iter().filter(|m| m.1 == Tag::Train).count();
     let sp = &spec.splits;
+    let train_motions = motions.iter().filter(|m| m.1 == Tag::Train).count();
+    let test_garments: usize = spec
+        .garments
+        .iter()
+        .filter(|g| g.split == Tag::Test)
+        .map(|g| g.names().count())
+        .sum();
+    let test_motions = motions.iter().filter(|m| m.1 == Tag::Test).count();
+    let grid = test_garments
+        .checked_mul(test_motions)
+        .and_then(|n| n.checked_mul(sp.test_grid_shapes));
     let count = [
         sp.test,
         sp.test_garment,
@@ -167,19 +190,7 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             .and_then(|n| n.checked_mul(s.draws_per_shape)),
         |total, n| total.and_then(|t| t.checked_add(n)),
     )
-    .and_then(|t| {
-        let garments: usize = spec
-            .garments
-            .iter()
-            .filter(|g| g.split == Tag::Test)
-            .map(|g| g.names().count())
-            .sum();
-        let motions = motions.iter().filter(|m| m.1 == Tag::Test).count();
-        garments
-            .checked_mul(motions)
-            .and_then(|n| n.checked_mul(sp.test_grid_shapes))
-            .and_then(|n| t.checked_add(n))
-    })
+    .and_then(|t| grid.and_then(|g| t.checked_add(g)))
     .filter(|&n| n <= MAX_PLANNED_SEQUENCES);
     if count.is_none() {
         return Err(Error::value(
@@ -191,156 +202,214 @@ pub fn plan(spec: &DatasetSpec, motions: &[(String, Tag)]) -> Result<Vec<Planned
             &format!("must hold at most {MAX_PLANNED_SEQUENCES} sequences"),
         ));
     }
-    let pick = |list: &[&String], rng: &mut ChaCha8Rng| -> String {
-        list[rng.random_range(0..list.len())].clone()
-    };
-    let garment_names: Vec<(String, Tag)> = spec
-        .garments
-        .iter()
-        .flat_map(|g| g.names().map(move |name| (name, g.split)))
-        .collect();
-    let garments_tagged = |tag: Tag| -> Vec<&String> {
-        garment_names
+    Ok(())
+}
+
+/// A random test set: how many sequences, where its garment and motion come from, and
+/// whether its shape and material are drawn from the held-out ranges.
+#[derive(Debug, Clone, Copy)]
+struct HeldOut {
+    split: Split,
+    count: usize,
+    garments: Tag,
+    motions: Tag,
+    new_shape: bool,
+    new_material: bool,
+}
+
+impl HeldOut {
+    /// The random test sets, each drawing its unseen factors from the held-out tags or
+    /// ranges, in the plan's order.
+    fn sets(sp: &SplitSpec) -> [HeldOut; 5] {
+        let set = |split, count, garments, motions, new_shape, new_material| HeldOut {
+            split,
+            count,
+            garments,
+            motions,
+            new_shape,
+            new_material,
+        };
+        [
+            set(Split::Test, sp.test, Tag::Test, Tag::Test, true, true),
+            set(
+                Split::TestGarment,
+                sp.test_garment,
+                Tag::Test,
+                Tag::Train,
+                false,
+                false,
+            ),
+            set(
+                Split::TestMotion,
+                sp.test_motion,
+                Tag::Train,
+                Tag::Test,
+                false,
+                false,
+            ),
+            set(
+                Split::TestShape,
+                sp.test_shape,
+                Tag::Train,
+                Tag::Train,
+                true,
+                false,
+            ),
+            set(
+                Split::TestMaterial,
+                sp.test_material,
+                Tag::Train,
+                Tag::Train,
+                false,
+                true,
+            ),
+        ]
+    }
+}
+
+/// What every stage of a plan draws from: the spec, its garment names (variants expanded)
+/// and motions with their tags, and the held-out ranges.
+struct Planner<'a> {
+    spec: &'a DatasetSpec,
+    garments: Vec<(String, Tag)>,
+    motions: &'a [(String, Tag)],
+    test_betas: [f64; 2],
+    test_material: MaterialRanges,
+}
+
+impl<'a> Planner<'a> {
+    fn new(spec: &'a DatasetSpec, motions: &'a [(String, Tag)]) -> Self {
+        Self {
+            spec,
+            garments: spec
+                .garments
+                .iter()
+                .flat_map(|g| g.names().map(move |name| (name, g.split)))
+                .collect(),
+            motions,
+            test_betas: spec
+                .splits
+                .test_betas_range
+                .unwrap_or(spec.sequence.betas_range),
+            test_material: spec.splits.test_material_ranges.unwrap_or(spec.material),
+        }
+    }
+
+    fn garments(&self, tag: Tag) -> Vec<&String> {
+        self.garments
             .iter()
             .filter(|g| g.1 == tag)
             .map(|g| &g.0)
             .collect()
-    };
-    let motions_tagged = |tag: Tag| -> Vec<&String> {
-        motions
+    }
+
+    fn motions(&self, tag: Tag) -> Vec<&String> {
+        self.motions
             .iter()
             .filter(|m| m.1 == tag)
             .map(|m| &m.0)
             .collect()
-    };
-    let test_betas = spec.splits.test_betas_range.unwrap_or(s.betas_range);
-    let test_material = spec.splits.test_material_ranges.unwrap_or(spec.material);
-    let sequence = |split: Split, key: String, name: String, garment, motion, b, m| {
-        let seed = derive_seed(spec.seed, &key);
+    }
+
+    /// One sequence, its seed derived from its key.
+    fn sequence(
+        &self,
+        split: Split,
+        key: String,
+        name: String,
+        (garment, motion): (String, String),
+        betas: Vec<f64>,
+        material: Material,
+    ) -> PlannedSequence {
+        let seed = derive_seed(self.spec.seed, &key);
         PlannedSequence {
             id: format!("{split}-{name}-{:08x}", seed as u32),
             key,
             split,
             garment,
             motion,
-            betas: b,
-            material: m,
-            friction: s.friction,
+            betas,
+            material,
+            friction: self.spec.sequence.friction,
             seed,
         }
-    };
-    let mut out = Vec::new();
-    // Training: every training motion x shapes x draws (garment + material per draw).
-    for motion in motions_tagged(Tag::Train) {
-        for shape in 0..s.shapes_per_motion {
-            let shape_key = format!("train/{motion}/shape{shape}");
-            let b = betas(&mut rng(spec.seed, &shape_key), s.betas, s.betas_range);
-            for draw in 0..s.draws_per_shape {
-                let key = format!("{shape_key}/draw{draw}");
-                let mut r = rng(spec.seed, &key);
-                let garment = pick(&garments_tagged(Tag::Train), &mut r);
-                let m = material(&mut r, &spec.material);
-                let name = format!("{}-s{shape}d{draw}", slug(motion));
-                out.push(sequence(
-                    Split::Train,
-                    key,
-                    name,
-                    garment,
-                    motion.clone(),
-                    b.clone(),
-                    m,
-                ));
+    }
+
+    /// Training: every training motion x shapes x draws (garment + material per draw).
+    fn training(&self) -> Vec<PlannedSequence> {
+        let (spec, s) = (self.spec, &self.spec.sequence);
+        let garments = self.garments(Tag::Train);
+        let mut out = Vec::new();
+        for motion in self.motions(Tag::Train) {
+            for shape in 0..s.shapes_per_motion {
+                let shape_key = format!("train/{motion}/shape{shape}");
+                let b = betas(&mut rng(spec.seed, &shape_key), s.betas, s.betas_range);
+                for draw in 0..s.draws_per_shape {
+                    let key = format!("{shape_key}/draw{draw}");
+                    let mut r = rng(spec.seed, &key);
+                    let garment = pick(&garments, &mut r);
+                    let m = material(&mut r, &spec.material);
+                    let name = format!("{}-s{shape}d{draw}", slug(motion));
+                    let pair = (garment, motion.clone());
+                    out.push(self.sequence(Split::Train, key, name, pair, b.clone(), m));
+                }
             }
         }
+        out
     }
-    // Test sets: each draws its unseen factors from the held-out tags or ranges.
-    let sets = [
-        (
-            Split::Test,
-            spec.splits.test,
-            Tag::Test,
-            Tag::Test,
-            true,
-            true,
-        ),
-        (
-            Split::TestGarment,
-            spec.splits.test_garment,
-            Tag::Test,
-            Tag::Train,
-            false,
-            false,
-        ),
-        (
-            Split::TestMotion,
-            spec.splits.test_motion,
-            Tag::Train,
-            Tag::Test,
-            false,
-            false,
-        ),
-        (
-            Split::TestShape,
-            spec.splits.test_shape,
-            Tag::Train,
-            Tag::Train,
-            true,
-            false,
-        ),
-        (
-            Split::TestMaterial,
-            spec.splits.test_material,
-            Tag::Train,
-            Tag::Train,
-            false,
-            true,
-        ),
-    ];
-    for (split, count, garment_tag, motion_tag, new_shape, new_material) in sets {
-        for i in 0..count {
-            let key = format!("{split}/{i}");
-            let mut r = rng(spec.seed, &key);
-            let garment = pick(&garments_tagged(garment_tag), &mut r);
-            let motion = pick(&motions_tagged(motion_tag), &mut r);
-            let b = betas(
-                &mut r,
-                s.betas,
-                if new_shape { test_betas } else { s.betas_range },
-            );
-            let m = material(
-                &mut r,
-                if new_material {
-                    &test_material
+
+    /// A random test set's sequences.
+    fn held_out(&self, set: HeldOut) -> Vec<PlannedSequence> {
+        let (spec, s) = (self.spec, &self.spec.sequence);
+        let (garments, motions) = (self.garments(set.garments), self.motions(set.motions));
+        (0..set.count)
+            .map(|i| {
+                let key = format!("{}/{i}", set.split);
+                let mut r = rng(spec.seed, &key);
+                let garment = pick(&garments, &mut r);
+                let motion = pick(&motions, &mut r);
+                let range = if set.new_shape {
+                    self.test_betas
+                } else {
+                    s.betas_range
+                };
+                let b = betas(&mut r, s.betas, range);
+                let ranges = if set.new_material {
+                    &self.test_material
                 } else {
                     &spec.material
-                },
-            );
-            let name = format!("{}-{i}", slug(&motion));
-            out.push(sequence(split, key, name, garment, motion, b, m));
-        }
+                };
+                let m = material(&mut r, ranges);
+                let name = format!("{}-{i}", slug(&motion));
+                self.sequence(set.split, key, name, (garment, motion), b, m)
+            })
+            .collect()
     }
-    // The test grid: every held-out garment x every held-out motion x its shapes.
-    for garment in garments_tagged(Tag::Test) {
-        for motion in motions_tagged(Tag::Test) {
-            for shape in 0..sp.test_grid_shapes {
-                let key = format!("test_grid/{garment}/{motion}/shape{shape}");
-                let mut r = rng(spec.seed, &key);
-                let b = betas(&mut r, s.betas, test_betas);
-                let m = material(&mut r, &test_material);
-                let name = format!("{}-{}-s{shape}", slug(garment), slug(motion));
-                out.push(sequence(
-                    Split::TestGrid,
-                    key,
-                    name,
-                    garment.clone(),
-                    motion.clone(),
-                    b,
-                    m,
-                ));
+
+    /// The test grid: every held-out garment x every held-out motion x its shapes.
+    fn test_grid(&self) -> Vec<PlannedSequence> {
+        let (spec, s) = (self.spec, &self.spec.sequence);
+        let mut out = Vec::new();
+        for garment in self.garments(Tag::Test) {
+            for motion in self.motions(Tag::Test) {
+                for shape in 0..spec.splits.test_grid_shapes {
+                    let key = format!("test_grid/{garment}/{motion}/shape{shape}");
+                    let mut r = rng(spec.seed, &key);
+                    let b = betas(&mut r, s.betas, self.test_betas);
+                    let m = material(&mut r, &self.test_material);
+                    let name = format!("{}-{}-s{shape}", slug(garment), slug(motion));
+                    let pair = (garment.clone(), motion.clone());
+                    out.push(self.sequence(Split::TestGrid, key, name, pair, b, m));
+                }
             }
         }
+        out
     }
-    Ok(out)
+}
+
+/// One of `list`, uniformly.
+fn pick(list: &[&String], rng: &mut ChaCha8Rng) -> String {
+    list[rng.random_range(0..list.len())].clone()
 }
 
 #[cfg(test)]
