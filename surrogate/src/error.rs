@@ -3,11 +3,14 @@
 
 use thiserror::Error;
 
-/// An [`Error::File`] naming `path`.
-pub(crate) fn file_error(path: &std::path::Path, problem: impl std::fmt::Display) -> Error {
+/// What went wrong with a file: an error of its own kind (kept as the source) or words.
+pub type Problem = Box<dyn std::error::Error + Send + Sync>;
+
+/// An [`Error::File`] naming `path`, keeping `problem` as its source.
+pub(crate) fn file_error(path: &std::path::Path, problem: impl Into<Problem>) -> Error {
     Error::File {
         path: path.display().to_string(),
-        problem: problem.to_string(),
+        problem: problem.into(),
     }
 }
 
@@ -96,8 +99,9 @@ pub enum Error {
     File {
         /// The file.
         path: String,
-        /// What is wrong.
-        problem: String,
+        /// What is wrong: the underlying error (a parser's, the file system's) or words.
+        #[source]
+        problem: Problem,
     },
     /// A configuration file or value is unusable.
     #[error("{path}: {message}")]
@@ -153,4 +157,27 @@ pub enum Error {
     /// A picture could not be drawn or written.
     #[error(transparent)]
     Render(#[from] render::Error),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_error_keeps_its_cause_as_the_source() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("manifest.json");
+        std::fs::write(&manifest, "{ not json").unwrap();
+        let e = crate::data::TrainingTensors::open(dir.path()).unwrap_err();
+        assert!(matches!(&e, Error::File { path, .. } if *path == manifest.display().to_string()));
+        let source = std::error::Error::source(&e).expect("the parser's error is kept");
+        assert!(source.downcast_ref::<serde_json::Error>().is_some());
+        // Words are a source too, and the message is the file and the problem.
+        let e = file_error(&manifest, "damaged");
+        assert_eq!(e.to_string(), format!("{}: damaged", manifest.display()));
+        assert_eq!(
+            std::error::Error::source(&e).unwrap().to_string(),
+            "damaged"
+        );
+    }
 }

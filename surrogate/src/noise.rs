@@ -53,14 +53,15 @@ mod tests {
         let field = smooth_field(&mut generator(3, 9, 0), 2, 32, 4);
         assert_eq!(field.len(), 2 * 32 * 32);
         assert_eq!(field, smooth_field(&mut generator(3, 9, 0), 2, 32, 4));
-        // Neighbouring texels differ by far less than the field's spread.
+        // Neighbouring texels differ by far less than the field's spread (independent draws
+        // would differ by about 1.4 times it).
         let spread = (field.iter().map(|v| v * v).sum::<f32>() / field.len() as f32).sqrt();
         let step = field[..32]
             .windows(2)
             .map(|w| (w[1] - w[0]).abs())
             .fold(0.0f32, f32::max);
         assert!(spread > 0.2, "spread {spread}");
-        assert!(step < 0.25 * spread, "step {step} against spread {spread}");
+        assert!(step < 0.5 * spread, "step {step} against spread {spread}");
         // The channels are drawn apart.
         assert_ne!(field[..1024], field[1024..]);
     }

@@ -39,7 +39,7 @@ impl Sequence {
         let name = path.display().to_string();
         let fail = |problem: String| Error::File {
             path: name.clone(),
-            problem,
+            problem: problem.into(),
         };
         let meta = r
             .meta
@@ -184,7 +184,8 @@ pub fn roundtrip_floor(
                 sequence.meta.garment,
                 sequence.meta.motion,
                 sequence.len()
-            ),
+            )
+            .into(),
         });
     }
     distances.sort_by(f64::total_cmp);

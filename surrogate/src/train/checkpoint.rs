@@ -89,7 +89,7 @@ pub fn save(
     let dir = run.join(&name);
     let temporary = files::Temporary::create_dir(&dir)?;
     let tmp = temporary.path().to_path_buf();
-    let fail = |file: &str, e: &dyn std::fmt::Display| file_error(&tmp.join(file), e);
+    let fail = |file: &str, e: &dyn std::fmt::Display| file_error(&tmp.join(file), e.to_string());
     model
         .clone()
         .save_file(tmp.join("model.bpk"))
