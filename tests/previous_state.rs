@@ -9,39 +9,13 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use common::{fails, ok};
+use common::{fails, ok, synth_spec, tiny_spec, tiny_tensors};
 use sim::recording::Recording;
 use surrogate::burn::prelude::Device;
 use surrogate::data::{Sequence, TrainingTensors, previous_state_map};
 use surrogate::predict::{BodySequence, Predictor, Settings};
 use surrogate::run::TrainedModel;
 use surrogate::train::{Batch, Recipe};
-
-/// One skirt sequence on walk (train) and one on arm_swing (test), 12 frames each.
-const SPEC: &str = r#"
-name = "previous-state-test"
-seed = 5
-[sequence]
-frames = 12
-blend_frames = 3
-settle_frames = 1
-shapes_per_motion = 1
-draws_per_shape = 1
-[solver]
-substeps = 1
-max_iterations = 4
-[[garments]]
-name = "skirt"
-split = "train"
-[[motions]]
-source = "walk"
-split = "train"
-[[motions]]
-source = "arm_swing"
-split = "test"
-[splits]
-test_motion = 1
-"#;
 
 /// A tiny previous-state model, trained for a few steps.
 const CONFIG: &str = r#"
@@ -87,23 +61,10 @@ fn fixture() -> &'static Fixture {
         ));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let (spec, data) = (dir.join("spec.toml"), dir.join("data"));
         let (tensors, run, config) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
-        std::fs::write(&spec, SPEC).unwrap();
         std::fs::write(&config, CONFIG).unwrap();
-        ok(&["synth", "--spec", s(&spec), "--out", s(&data), "--quiet"]);
-        ok(&[
-            "dataset",
-            "tensors",
-            s(&data),
-            "--out",
-            s(&tensors),
-            "--resolution",
-            "32",
-            "--target",
-            "lbs_residual",
-            "--quiet",
-        ]);
+        let data = synth_spec(&dir, "data", &tiny_spec("previous-state-test", 5));
+        tiny_tensors(&data, &tensors, &[]);
         ok(&[
             "train",
             "--data",

@@ -7,48 +7,12 @@ mod common;
 
 use std::path::Path;
 
-use common::{json, ok, run_with};
+use common::{json, ok, run_with, synth_spec, tiny_spec};
 use serde_json::Value;
 
-/// Two skirt sequences on walk, one train and one test (motion unseen), 12 frames each.
-const SPEC: &str = r#"
-name = "surrogate-data"
-seed = 3
-[sequence]
-frames = 12
-blend_frames = 3
-settle_frames = 1
-shapes_per_motion = 1
-draws_per_shape = 1
-[solver]
-substeps = 1
-max_iterations = 4
-[[garments]]
-name = "skirt"
-split = "train"
-[[motions]]
-source = "walk"
-split = "train"
-[[motions]]
-source = "arm_swing"
-split = "test"
-[splits]
-test_motion = 1
-"#;
-
+/// The tiny dataset, seeded 3.
 fn synth(dir: &Path) -> std::path::PathBuf {
-    let spec = dir.join("spec.toml");
-    std::fs::write(&spec, SPEC).unwrap();
-    let data = dir.join("data");
-    ok(&[
-        "synth",
-        "--spec",
-        spec.to_str().unwrap(),
-        "--out",
-        data.to_str().unwrap(),
-        "--quiet",
-    ]);
-    data
+    synth_spec(dir, "data", &tiny_spec("surrogate-data", 3))
 }
 
 #[test]
@@ -293,24 +257,11 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
 fn dataset_tensors_combine_datasets_that_share_material_ranges() {
     let dir = tempfile::tempdir().unwrap();
     let first = synth(dir.path());
-    let synth_as = |name: &str, spec: String| {
-        let path = dir.path().join(format!("{name}.toml"));
-        std::fs::write(&path, spec).unwrap();
-        let data = dir.path().join(name);
-        ok(&[
-            "synth",
-            "--spec",
-            path.to_str().unwrap(),
-            "--out",
-            data.to_str().unwrap(),
-            "--quiet",
-        ]);
-        data
-    };
-    let second = synth_as("second", SPEC.replace("seed = 3", "seed = 4"));
-    let other = synth_as(
+    let second = synth_spec(dir.path(), "second", &tiny_spec("surrogate-data", 4));
+    let other = synth_spec(
+        dir.path(),
         "other",
-        SPEC.replace("seed = 3", "seed = 5")
+        &tiny_spec("surrogate-data", 5)
             .replace("[solver]", "[material]\nk_s = [50.0, 60.0]\n[solver]"),
     );
     let tensors = |dirs: &[&Path], out: &Path| {

@@ -9,34 +9,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use common::{binary, fails, json, ok, python_has, run_with};
+use common::{binary, fails, json, ok, python_has, run_with, synth_spec, tiny_spec, tiny_tensors};
 use serde_json::Value;
-
-/// One skirt sequence on walk (train) and one on arm_swing (test), 12 frames each.
-const SPEC: &str = r#"
-name = "train-test"
-seed = 5
-[sequence]
-frames = 12
-blend_frames = 3
-settle_frames = 1
-shapes_per_motion = 1
-draws_per_shape = 1
-[solver]
-substeps = 1
-max_iterations = 4
-[[garments]]
-name = "skirt"
-split = "train"
-[[motions]]
-source = "walk"
-split = "train"
-[[motions]]
-source = "arm_swing"
-split = "test"
-[splits]
-test_motion = 1
-"#;
 
 /// A tiny model and a short schedule: checkpoints every 10 steps.
 const CONFIG: &str = r#"
@@ -66,30 +40,9 @@ fn tensors() -> &'static Path {
             std::env::temp_dir().join(format!("dit-garment-train-test-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let spec = dir.join("spec.toml");
-        std::fs::write(&spec, SPEC).unwrap();
-        let data = dir.join("data");
+        let data = synth_spec(&dir, "data", &tiny_spec("train-test", 5));
         let tensors = dir.join("tensors");
-        ok(&[
-            "synth",
-            "--spec",
-            spec.to_str().unwrap(),
-            "--out",
-            data.to_str().unwrap(),
-            "--quiet",
-        ]);
-        ok(&[
-            "dataset",
-            "tensors",
-            data.to_str().unwrap(),
-            "--out",
-            tensors.to_str().unwrap(),
-            "--resolution",
-            "32",
-            "--target",
-            "lbs_residual",
-            "--quiet",
-        ]);
+        tiny_tensors(&data, &tensors, &[]);
         std::fs::write(dir.join("model.toml"), CONFIG).unwrap();
         tensors
     })

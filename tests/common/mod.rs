@@ -2,7 +2,7 @@
 
 #![allow(dead_code)] // each test file uses its own subset
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -114,4 +114,71 @@ pub fn python_tool(script: &str, arg: &Path) -> Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).expect("the tool prints JSON")
+}
+
+/// The tiny dataset spec of the end-to-end tests, named `name` and seeded by `seed`: one
+/// skirt sequence on `walk` (train) and one on `arm_swing` (`test_motion`, a motion the train
+/// split never sees), 12 frames each, at a fast solver setting. One spec for every test file
+/// that needs a dataset to train or score on.
+pub fn tiny_spec(name: &str, seed: u64) -> String {
+    format!(
+        r#"name = "{name}"
+seed = {seed}
+[sequence]
+frames = 12
+blend_frames = 3
+settle_frames = 1
+shapes_per_motion = 1
+draws_per_shape = 1
+[solver]
+substeps = 1
+max_iterations = 4
+[[garments]]
+name = "skirt"
+split = "train"
+[[motions]]
+source = "walk"
+split = "train"
+[[motions]]
+source = "arm_swing"
+split = "test"
+[splits]
+test_motion = 1
+"#
+    )
+}
+
+/// Synthesizes `spec` into `dir/<name>` (the spec written beside it as `<name>.toml`).
+pub fn synth_spec(dir: &Path, name: &str, spec: &str) -> PathBuf {
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, spec).unwrap();
+    let data = dir.join(name);
+    ok(&[
+        "synth",
+        "--spec",
+        path.to_str().unwrap(),
+        "--out",
+        data.to_str().unwrap(),
+        "--quiet",
+    ]);
+    data
+}
+
+/// `dataset tensors` of `data` into `out` at 32 x 32 with `lbs_residual` targets, with
+/// `extra` flags.
+pub fn tiny_tensors(data: &Path, out: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "dataset",
+        "tensors",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--resolution",
+        "32",
+        "--target",
+        "lbs_residual",
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    ok(&args);
 }
