@@ -1,0 +1,191 @@
+//! End-to-end: an ensemble folder (`ensemble.toml` naming two runs) predicts the mean of its
+//! members where sampling is linear, and a bad ensemble file is named with nothing written.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use common::{fails, ok, synth_spec, tiny_spec, tiny_tensors};
+use sim::recording::Recording;
+
+/// A tiny model, trained for a few steps.
+const CONFIG: &str = r#"
+[model]
+patch = 4
+width = 16
+depth = 1
+heads = 2
+mlp_ratio = 2.0
+condition_tokens = 2
+[training]
+steps = 10
+batch = 2
+lr = 1e-3
+warmup_steps = 2
+log_every = 5
+val_every = 10
+checkpoint_every = 10
+val_frames = 4
+"#;
+
+struct Fixture {
+    dir: PathBuf,
+    run: PathBuf,
+    /// The simulated test sequence.
+    truth: PathBuf,
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The tiny dataset, its tensors (32 x 32, lbs_residual) and a trained run, made once.
+fn fixture() -> &'static Fixture {
+    static FIXTURE: OnceLock<Fixture> = OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let dir =
+            std::env::temp_dir().join(format!("dit-garment-ensemble-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (tensors, run, config) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
+        std::fs::write(&config, CONFIG).unwrap();
+        let data = synth_spec(&dir, "data", &tiny_spec("ensemble-test", 5));
+        tiny_tensors(&data, &tensors, &[]);
+        ok(&[
+            "train",
+            "--data",
+            s(&tensors),
+            "--out",
+            s(&run),
+            "--config",
+            s(&config),
+            "--threads",
+            "1",
+            "--quiet",
+        ]);
+        let truth = std::fs::read_dir(data.join("sequences"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| s(p.file_name().unwrap().as_ref()).starts_with("test_motion"))
+            .expect("the test sequence");
+        Fixture { dir, run, truth }
+    })
+}
+
+/// An ensemble folder of two runs (the fixture's and one trained with another seed) predicts
+/// the mean of their predictions where sampling is linear (no guidance), and a bad ensemble
+/// file is named: too few members, members trained on other tensors.
+#[test]
+fn an_ensemble_predicts_the_mean_of_its_members() {
+    let f = fixture();
+    let other = f.dir.join("run-seed1");
+    if !other.join("model.safetensors").exists() {
+        let config = f.dir.join("m-seed1.toml");
+        std::fs::write(&config, format!("{CONFIG}seed = 1\n")).unwrap();
+        let tensors = f.dir.join("tensors");
+        ok(&[
+            "train",
+            "--data",
+            s(&tensors),
+            "--out",
+            s(&other),
+            "--config",
+            s(&config),
+            "--threads",
+            "1",
+            "--quiet",
+        ]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let ensemble = dir.path().join("pair");
+    std::fs::create_dir_all(&ensemble).unwrap();
+    let members = |runs: &[&Path]| {
+        let names: Vec<String> = runs.iter().map(|r| format!("{:?}", s(r))).collect();
+        std::fs::write(
+            ensemble.join("ensemble.toml"),
+            format!("members = [{}]\n", names.join(", ")),
+        )
+        .unwrap();
+    };
+    let args = |model: &Path, out: &Path| -> Vec<String> {
+        [
+            "predict",
+            "--model",
+            s(model),
+            "--config-from",
+            s(&f.truth),
+            "--out",
+            s(out),
+            "--guidance",
+            "0",
+            "--guidance-refine",
+            "0",
+            "--quiet",
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |model: &Path, name: &str| {
+        let out = dir.path().join(name);
+        ok(&args(model, &out)
+            .iter()
+            .map(|a| a.as_str())
+            .collect::<Vec<_>>());
+        Recording::read(&out).unwrap().garment
+    };
+    members(&[&f.run, &other]);
+    let (a, b, pair) = (
+        run(&f.run, "a.mcap"),
+        run(&other, "b.mcap"),
+        run(&ensemble, "pair.mcap"),
+    );
+    let (mut apart, mut off) = (0.0f32, 0.0f32);
+    for ((a, b), pair) in a
+        .iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .zip(pair.iter().flatten())
+    {
+        for k in 0..3 {
+            apart = apart.max((a[k] - b[k]).abs());
+            off = off.max((pair[k] - 0.5 * (a[k] + b[k])).abs());
+        }
+    }
+    assert!(apart > 1e-4, "the two members predict alike ({apart} m)");
+    assert!(
+        off < 1e-5,
+        "the ensemble is {off} m from the mean of its members"
+    );
+
+    let out = dir.path().join("bad.mcap");
+    let failure = || {
+        let e = fails(
+            &args(&ensemble, &out)
+                .iter()
+                .map(|a| a.as_str())
+                .collect::<Vec<_>>(),
+        );
+        assert!(!out.exists(), "{} was written", out.display());
+        e
+    };
+    members(&[&f.run]);
+    let e = failure();
+    assert!(
+        e.contains("ensemble.toml") && e.contains("at least 2"),
+        "{e}"
+    );
+    let retrained = dir.path().join("other-tensors");
+    std::fs::create_dir_all(&retrained).unwrap();
+    for file in ["config.toml", "model.safetensors", "tensors.json"] {
+        std::fs::copy(other.join(file), retrained.join(file)).unwrap();
+    }
+    let manifest = std::fs::read_to_string(retrained.join("tensors.json")).unwrap();
+    std::fs::write(retrained.join("tensors.json"), format!("{manifest}\n")).unwrap();
+    members(&[&f.run, &retrained]);
+    let e = failure();
+    assert!(
+        e.contains("tensors.json") && e.contains("same tensors"),
+        "{e}"
+    );
+}
