@@ -112,7 +112,7 @@ pub fn garment(
     if source.ends_with(".json") {
         // A sewing pattern (GarmentCode specification), sewn and cached as a library design.
         let pattern =
-            garments::Pattern::read(path).map_err(|e| fail(format!("pattern file: {e}")))?;
+            garments::Pattern::read_seated(path).map_err(|e| fail(format!("pattern file: {e}")))?;
         let name = path
             .file_stem()
             .map_or_else(|| source.to_string(), |s| s.to_string_lossy().into_owned());

@@ -105,7 +105,7 @@ pub fn load_pattern(source: &str) -> Result<Pattern> {
     }
     let path = Path::new(source);
     if path.extension().is_some_and(|e| e == "json") || path.exists() {
-        return Ok(Pattern::read(path)?);
+        return Ok(Pattern::read_seated(path)?);
     }
     Err(unknown(source))
 }
@@ -147,7 +147,7 @@ fn make(source: &str, out: &Path, report: Option<&Path>, edge_length: f64) -> Re
 fn check(file: &Path, scale: f64, json: Option<&Path>) -> Result<()> {
     let shown = file.display().to_string();
     if file.extension().is_some_and(|e| e == "json") {
-        let pattern = Pattern::read(file)?;
+        let pattern = Pattern::read_seated(file)?;
         let mesh = pattern
             .mesh(garments::pattern::DEFAULT_EDGE_LENGTH_M)
             .map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;

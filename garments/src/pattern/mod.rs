@@ -9,6 +9,7 @@
 
 mod curve;
 mod meshing;
+mod sleeves;
 mod spec;
 mod uv;
 
@@ -17,6 +18,7 @@ use std::path::Path;
 
 pub use curve::{Curve, relative_to_absolute};
 pub use meshing::{DEFAULT_EDGE_LENGTH_M, SewnMesh, joined_roots};
+pub use sleeves::ARM_ANGLE_DEG;
 pub use spec::{EdgeJson, PanelJson, PatternJson, PropertiesJson, SpecFile};
 
 use crate::error::{Error, Result};
