@@ -3,8 +3,10 @@
 //! material, with intersection guidance (`guidance.rs`), decoded through the chart-aware
 //! readback to world vertices.
 //!
-//! Frames are independent (non-autoregressive), so a sequence is sampled in batches of
-//! frames. By default every frame starts from the same noise, which keeps neighbouring frames
+//! Frames are independent (the paper's model), so a sequence is sampled in batches of frames
+//! (`sampling.rs`); a model that takes the garment's previous state (`previous_state`) is
+//! sampled one frame after another instead, each frame given the model's own map of the frame
+//! before. By default every frame starts from the same noise, which keeps neighbouring frames
 //! coherent; [`Noise::PerFrame`] draws it per frame. Same inputs and settings, same bits.
 
 mod guidance;
