@@ -7,10 +7,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 
-use common::{fails, json, ok, synth_spec, tiny_spec, tiny_tensors};
+use common::{TinyRun, fails, json, ok, tiny_run};
 use sim::recording::Recording;
 
 /// A tiny model, trained for a few steps: enough to have weights of the right shapes. It takes
@@ -35,54 +35,14 @@ checkpoint_every = 10
 val_frames = 4
 "#;
 
-struct Fixture {
-    dir: PathBuf,
-    run: PathBuf,
-    /// The simulated test sequence.
-    truth: PathBuf,
-}
-
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
 /// The dataset, its tensors (32 x 32, lbs_residual) and a trained run, made once.
-fn fixture() -> &'static Fixture {
-    static FIXTURE: OnceLock<Fixture> = OnceLock::new();
-    FIXTURE.get_or_init(|| {
-        let dir =
-            std::env::temp_dir().join(format!("dit-garment-predict-test-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (tensors, run, config) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
-        std::fs::write(&config, CONFIG).unwrap();
-        let data = synth_spec(&dir, "data", &tiny_spec("predict-test", 5));
-        tiny_tensors(&data, &tensors, &["--body-nearest"]);
-        ok(&[
-            "train",
-            "--data",
-            s(&tensors),
-            "--out",
-            s(&run),
-            "--config",
-            s(&config),
-            "--threads",
-            "1",
-            "--quiet",
-        ]);
-        let truth = std::fs::read_dir(data.join("sequences"))
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .find(|p| {
-                p.file_name()
-                    .unwrap()
-                    .to_str()
-                    .unwrap()
-                    .starts_with("test_motion")
-            })
-            .expect("the test sequence");
-        Fixture { dir, run, truth }
-    })
+fn fixture() -> &'static TinyRun {
+    static FIXTURE: OnceLock<TinyRun> = OnceLock::new();
+    FIXTURE.get_or_init(|| tiny_run("predict-test", &["--body-nearest"], CONFIG))
 }
 
 fn predict(out: &Path, extra: &[&str]) -> String {

@@ -6,10 +6,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 
-use common::{fails, ok, synth_spec, tiny_spec, tiny_tensors};
+use common::{TinyRun, fails, ok, tiny_run};
 use sim::recording::Recording;
 use surrogate::burn::prelude::Device;
 use surrogate::data::{Sequence, TrainingTensors, previous_state_map};
@@ -39,56 +39,14 @@ val_frames = 4
 previous_noise = 0.5
 "#;
 
-struct Fixture {
-    dir: PathBuf,
-    tensors: PathBuf,
-    run: PathBuf,
-    /// The simulated test sequence.
-    truth: PathBuf,
-}
-
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
 /// The dataset, its tensors (32 x 32, lbs_residual) and a trained previous-state run.
-fn fixture() -> &'static Fixture {
-    static FIXTURE: OnceLock<Fixture> = OnceLock::new();
-    FIXTURE.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!(
-            "dit-garment-previous-state-test-{}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (tensors, run, config) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
-        std::fs::write(&config, CONFIG).unwrap();
-        let data = synth_spec(&dir, "data", &tiny_spec("previous-state-test", 5));
-        tiny_tensors(&data, &tensors, &[]);
-        ok(&[
-            "train",
-            "--data",
-            s(&tensors),
-            "--out",
-            s(&run),
-            "--config",
-            s(&config),
-            "--threads",
-            "1",
-            "--quiet",
-        ]);
-        let truth = std::fs::read_dir(data.join("sequences"))
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .find(|p| s(p.file_name().unwrap().as_ref()).starts_with("test_motion"))
-            .expect("the test sequence");
-        Fixture {
-            dir,
-            tensors,
-            run,
-            truth,
-        }
-    })
+fn fixture() -> &'static TinyRun {
+    static FIXTURE: OnceLock<TinyRun> = OnceLock::new();
+    FIXTURE.get_or_init(|| tiny_run("previous-state-test", &[], CONFIG))
 }
 
 fn worst(a: &[f32], b: &[f32]) -> f32 {

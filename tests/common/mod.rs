@@ -182,3 +182,64 @@ pub fn tiny_tensors(data: &Path, out: &Path, extra: &[&str]) {
     args.extend_from_slice(extra);
     ok(&args);
 }
+
+/// A tiny trained run and what it was made from.
+pub struct TinyRun {
+    /// The folder holding all of it.
+    pub dir: PathBuf,
+    /// The synthesized dataset.
+    pub data: PathBuf,
+    /// Its tensors.
+    pub tensors: PathBuf,
+    /// The trained run.
+    pub run: PathBuf,
+    /// The run's configuration file.
+    pub config: PathBuf,
+    /// The simulated `test_motion` sequence.
+    pub truth: PathBuf,
+}
+
+/// The fixture of the tests that predict: the tiny dataset (named `name`, seed 5), its
+/// tensors (with `tensor_flags`) and `config` trained on them on one thread, in a fresh folder
+/// `<temp>/dit-garment-<name>-<pid>`.
+pub fn tiny_run(name: &str, tensor_flags: &[&str], config: &str) -> TinyRun {
+    let dir = std::env::temp_dir().join(format!("dit-garment-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (tensors, run, config_path) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
+    std::fs::write(&config_path, config).unwrap();
+    let data = synth_spec(&dir, "data", &tiny_spec(name, 5));
+    tiny_tensors(&data, &tensors, tensor_flags);
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let (t, r, c) = (path(&tensors), path(&run), path(&config_path));
+    ok(&[
+        "train",
+        "--data",
+        &t,
+        "--out",
+        &r,
+        "--config",
+        &c,
+        "--threads",
+        "1",
+        "--quiet",
+    ]);
+    let truth = std::fs::read_dir(data.join("sequences"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("test_motion")
+        })
+        .expect("the test sequence");
+    TinyRun {
+        dir,
+        data,
+        tensors,
+        run,
+        config: config_path,
+        truth,
+    }
+}
