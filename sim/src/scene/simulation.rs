@@ -186,7 +186,7 @@ impl<'a> Simulation<'a> {
             // A limb swept the cloth inside within this frame: run it again, finer.
             kept = Some((
                 std::mem::replace(&mut self.state, saved.clone()),
-                self.stats.clone(),
+                self.stats,
             ));
             let finer = report.retries + 1;
             report = self.solver.advance_frame_from(

@@ -403,7 +403,7 @@ fn run_steps(
             step: done,
             loss: loss_value,
         });
-        if done % t.log_every != 0 && done != t.steps {
+        if !done.is_multiple_of(t.log_every) && done != t.steps {
             continue;
         }
         let line = log_line(
@@ -418,7 +418,7 @@ fn run_steps(
         log.push(line.clone());
         progress(Event::Log(line));
         interval = Interval::new();
-        if done % t.checkpoint_every == 0 {
+        if done.is_multiple_of(t.checkpoint_every) {
             // The log first: a run killed between the two resumes with its whole history
             // (lines past the checkpoint are dropped on resume).
             write_log(run, log)?;
@@ -448,7 +448,7 @@ fn log_line(
     device: &Device,
 ) -> LogLine {
     let done = state.step;
-    let val_loss = (done % t.val_every == 0 || done == t.steps)
+    let val_loss = (done.is_multiple_of(t.val_every) || done == t.steps)
         .then(|| validation_loss(ema, &data.val_batches, device))
         .flatten();
     if let Some(v) = val_loss {
