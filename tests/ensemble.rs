@@ -6,28 +6,8 @@ mod common;
 use std::path::Path;
 use std::sync::OnceLock;
 
-use common::{TinyRun, fails, ok, tiny_run};
+use common::{TinyRun, fails, ok, tiny_config, tiny_run};
 use sim::recording::Recording;
-
-/// A tiny model, trained for a few steps.
-const CONFIG: &str = r#"
-[model]
-patch = 4
-width = 16
-depth = 1
-heads = 2
-mlp_ratio = 2.0
-condition_tokens = 2
-[training]
-steps = 10
-batch = 2
-lr = 1e-3
-warmup_steps = 2
-log_every = 5
-val_every = 10
-checkpoint_every = 10
-val_frames = 4
-"#;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -36,7 +16,7 @@ fn s(p: &Path) -> &str {
 /// The tiny dataset, its tensors (32 x 32, lbs_residual) and a trained run, made once.
 fn fixture() -> &'static TinyRun {
     static FIXTURE: OnceLock<TinyRun> = OnceLock::new();
-    FIXTURE.get_or_init(|| tiny_run("ensemble-test", &[], CONFIG))
+    FIXTURE.get_or_init(|| tiny_run("ensemble-test", &[], &tiny_config("", "")))
 }
 
 /// An ensemble folder of two runs (the fixture's and one trained with another seed) predicts
@@ -48,7 +28,7 @@ fn an_ensemble_predicts_the_mean_of_its_members() {
     let other = f.dir.join("run-seed1");
     if !other.join("model.safetensors").exists() {
         let config = f.dir.join("m-seed1.toml");
-        std::fs::write(&config, format!("{CONFIG}seed = 1\n")).unwrap();
+        std::fs::write(&config, tiny_config("", "seed = 1\n")).unwrap();
         let tensors = f.dir.join("tensors");
         ok(&[
             "train",

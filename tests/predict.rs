@@ -10,30 +10,8 @@ mod common;
 use std::path::Path;
 use std::sync::OnceLock;
 
-use common::{TinyRun, fails, json, ok, tiny_run};
+use common::{TinyRun, fails, json, ok, tiny_config, tiny_run};
 use sim::recording::Recording;
-
-/// A tiny model, trained for a few steps: enough to have weights of the right shapes. It takes
-/// every body input, the nearest body points too.
-const CONFIG: &str = r#"
-[model]
-patch = 4
-width = 16
-depth = 1
-heads = 2
-mlp_ratio = 2.0
-condition_tokens = 2
-body_nearest = true
-[training]
-steps = 10
-batch = 2
-lr = 1e-3
-warmup_steps = 2
-log_every = 5
-val_every = 10
-checkpoint_every = 10
-val_frames = 4
-"#;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -42,7 +20,13 @@ fn s(p: &Path) -> &str {
 /// The dataset, its tensors (32 x 32, lbs_residual) and a trained run, made once.
 fn fixture() -> &'static TinyRun {
     static FIXTURE: OnceLock<TinyRun> = OnceLock::new();
-    FIXTURE.get_or_init(|| tiny_run("predict-test", &["--body-nearest"], CONFIG))
+    FIXTURE.get_or_init(|| {
+        tiny_run(
+            "predict-test",
+            &["--body-nearest"],
+            &tiny_config("body_nearest = true\n", ""),
+        )
+    })
 }
 
 fn predict(out: &Path, extra: &[&str]) -> String {

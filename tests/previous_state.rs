@@ -9,35 +9,13 @@ mod common;
 use std::path::Path;
 use std::sync::OnceLock;
 
-use common::{TinyRun, fails, ok, tiny_run};
+use common::{TinyRun, fails, ok, tiny_config, tiny_run};
 use sim::recording::Recording;
 use surrogate::burn::prelude::Device;
 use surrogate::data::{Sequence, TrainingTensors, previous_state_map};
 use surrogate::predict::{BodySequence, Predictor, Settings};
 use surrogate::run::TrainedModel;
 use surrogate::train::{Batch, Recipe};
-
-/// A tiny previous-state model, trained for a few steps.
-const CONFIG: &str = r#"
-[model]
-patch = 4
-width = 16
-depth = 1
-heads = 2
-mlp_ratio = 2.0
-condition_tokens = 2
-previous_state = true
-[training]
-steps = 10
-batch = 2
-lr = 1e-3
-warmup_steps = 2
-log_every = 5
-val_every = 10
-checkpoint_every = 10
-val_frames = 4
-previous_noise = 0.5
-"#;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -46,7 +24,13 @@ fn s(p: &Path) -> &str {
 /// The dataset, its tensors (32 x 32, lbs_residual) and a trained previous-state run.
 fn fixture() -> &'static TinyRun {
     static FIXTURE: OnceLock<TinyRun> = OnceLock::new();
-    FIXTURE.get_or_init(|| tiny_run("previous-state-test", &[], CONFIG))
+    FIXTURE.get_or_init(|| {
+        tiny_run(
+            "previous-state-test",
+            &[],
+            &tiny_config("previous_state = true\n", "previous_noise = 0.5\n"),
+        )
+    })
 }
 
 fn worst(a: &[f32], b: &[f32]) -> f32 {

@@ -243,3 +243,14 @@ pub fn tiny_run(name: &str, tensor_flags: &[&str], config: &str) -> TinyRun {
         truth,
     }
 }
+
+/// The tiny network of the tests that predict (width 16, one block, patch 4), trained for 10
+/// steps, with `model` and `training` keys added to its tables.
+pub fn tiny_config(model: &str, training: &str) -> String {
+    format!(
+        "[model]\npatch = 4\nwidth = 16\ndepth = 1\nheads = 2\nmlp_ratio = 2.0\n\
+         condition_tokens = 2\n{model}[training]\nsteps = 10\nbatch = 2\nlr = 1e-3\n\
+         warmup_steps = 2\nlog_every = 5\nval_every = 10\ncheckpoint_every = 10\nval_frames = 4\n\
+         {training}"
+    )
+}
