@@ -99,6 +99,17 @@ fn shipped_copy(dir: &Path) -> PathBuf {
     dir.to_path_buf()
 }
 
+/// `predict` with `model` into `out`, which must be refused: the error line.
+fn predict_fails(model: &Path, out: &Path) -> String {
+    fails(&[
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 /// A model folder whose statistics, size or ensemble list cannot be right is refused at load,
 /// naming the file and the value, before any prediction: `tensors.json` with a zero, negative
 /// or huge deviation, a huge mean, an empty material range or an unknown format; a
@@ -108,15 +119,7 @@ fn shipped_copy(dir: &Path) -> PathBuf {
 fn model_folders_that_cannot_be_right_are_refused_at_load() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.mcap");
-    let predict = |model: &Path| {
-        fails(&[
-            "predict",
-            "--model",
-            model.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-    };
+    let predict = |model: &Path| predict_fails(model, &out);
     let spoils = [
         (
             "/normalization/targets/std/1",
@@ -223,15 +226,7 @@ fn model_folders_that_cannot_be_right_are_refused_at_load() {
 fn odd_files_in_a_model_folder_are_named_for_what_they_are() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.mcap");
-    let predict = |model: &Path| {
-        fails(&[
-            "predict",
-            "--model",
-            model.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-    };
+    let predict = |model: &Path| predict_fails(model, &out);
     let looped = shipped_copy(&dir.path().join("looped"));
     let weights = looped.join("model.safetensors");
     std::fs::remove_file(&weights).unwrap();
