@@ -451,6 +451,11 @@ pub enum DatasetCommand {
         /// Frames per shard file.
         #[arg(long, default_value_t = 2048)]
         shard_frames: usize,
+        /// Held-out splits whose sequences join the train split, comma-separated (say
+        /// `test_grid` of a validation set, to refit a chosen recipe on training and
+        /// validation data together); the manifest's `joined_to_train` lists them.
+        #[arg(long, value_delimiter = ',')]
+        train_splits: Vec<String>,
         #[command(flatten)]
         model: ModelArgs,
         /// Hide the progress bar.

@@ -252,7 +252,8 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
 }
 
 /// Several datasets make one tensor set: frames of both, split by split; the same dataset
-/// twice, or one whose material ranges differ, is refused by name with nothing written.
+/// twice, or one whose material ranges differ, is refused by name with nothing written;
+/// `--train-splits` trains on held-out splits (a refit).
 #[test]
 fn dataset_tensors_combine_datasets_that_share_material_ranges() {
     let dir = tempfile::tempdir().unwrap();
@@ -264,12 +265,14 @@ fn dataset_tensors_combine_datasets_that_share_material_ranges() {
         &tiny_spec("surrogate-data", 5)
             .replace("[solver]", "[material]\nk_s = [50.0, 60.0]\n[solver]"),
     );
-    let tensors = |dirs: &[&Path], out: &Path| {
+    let tensors_with = |dirs: &[&Path], out: &Path, extra: &[&str]| {
         let mut args = vec!["dataset", "tensors"];
         args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
         args.extend(["--out", out.to_str().unwrap(), "--quiet"]);
+        args.extend(extra);
         run_with(&args, &[])
     };
+    let tensors = |dirs: &[&Path], out: &Path| tensors_with(dirs, out, &[]);
     let both = dir.path().join("both");
     let out = tensors(&[&first, &second], &both);
     assert!(
@@ -286,6 +289,35 @@ fn dataset_tensors_combine_datasets_that_share_material_ranges() {
         source.contains("data") && source.contains("second"),
         "{source}"
     );
+    assert!(m.get("joined_to_train").is_none(), "{m}");
+    // A refit: the held-out sequences join the train split, and the manifest says so.
+    let refit = dir.path().join("refit");
+    let out = tensors_with(
+        &[&first, &second],
+        &refit,
+        &["--train-splits", "test_motion"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: Value = json(&refit.join("manifest.json"));
+    assert_eq!(m["splits"]["train"]["sequences"], 4);
+    assert!(m["splits"].get("test_motion").is_none(), "{m}");
+    assert_eq!(m["joined_to_train"], serde_json::json!(["test_motion"]));
+    for (flag, names) in [("train", "held-out splits only"), ("tets", "unknown split")] {
+        let out_dir = dir.path().join("refused");
+        let out = tensors_with(&[&first], &out_dir, &["--train-splits", flag]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(names), "{stderr}");
+        assert!(
+            !out_dir.exists(),
+            "a refused run wrote {}",
+            out_dir.display()
+        );
+    }
     for (dirs, names) in [
         (vec![&first, &first], "also in"),
         (vec![&first, &other], "material ranges"),

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use dataset::{DatasetDir, ManifestRecord, load, stats};
+use dataset::{DatasetDir, ManifestRecord, Split, load, stats};
 use surrogate::data::{ConditionScaling, TensorOptions, write_tensors};
 use surrogate::geometry::TargetKind;
 
@@ -42,6 +42,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             window,
             every,
             shard_frames,
+            train_splits,
             model,
             quiet,
         } => {
@@ -68,11 +69,31 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 shard_frames,
                 conditions: ConditionScaling::parse(&conditions).context("unknown --conditions")?,
                 nearest: body_nearest,
+                train_splits: joined_splits(&train_splits)?,
                 ..TensorOptions::default()
             };
             tensors(&dirs, &out, model.body_model.as_deref(), &options, quiet)
         }
     }
+}
+
+/// `--train-splits`: the held-out splits named, as flags indexed like [`Split::ALL`].
+fn joined_splits(names: &[String]) -> Result<[bool; Split::ALL.len()]> {
+    let mut joined = Vec::new();
+    for name in names {
+        let split = Split::parse(name).with_context(|| {
+            format!(
+                "--train-splits: unknown split {name:?} (splits: {})",
+                Split::names()
+            )
+        })?;
+        anyhow::ensure!(
+            split != Split::Train,
+            "--train-splits: name held-out splits only (train is always trained on)"
+        );
+        joined.push(split);
+    }
+    Ok(Split::ALL.map(|s| joined.contains(&s)))
 }
 
 /// `dataset tensors`: the surrogate's training tensors of one dataset or several combined.

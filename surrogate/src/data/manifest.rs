@@ -112,6 +112,10 @@ pub struct TensorManifest {
     pub body_model: String,
     /// Per split: frames, sequences, shards.
     pub splits: BTreeMap<String, SplitInfo>,
+    /// Held-out splits of the datasets whose sequences were trained on (`--train-splits`: a
+    /// refit on training and validation data); empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joined_to_train: Vec<String>,
     /// The templates, in index order.
     pub templates: Vec<TemplateInfo>,
     /// `templates.safetensors` checksum.

@@ -50,6 +50,21 @@ pub struct TensorOptions {
     /// its normal (`lbs_residual` only).
     #[serde(default)]
     pub nearest: bool,
+    /// Held-out splits whose sequences join the train split (indexed as [`Split::ALL`]): the
+    /// refit of a chosen recipe on its training and validation data together.
+    #[serde(default)]
+    pub train_splits: [bool; Split::ALL.len()],
+}
+
+impl TensorOptions {
+    /// The split a sequence of `split` lands in: the train split where it joins it.
+    fn lands_in(&self, split: Split) -> Split {
+        let joined = Split::ALL
+            .iter()
+            .position(|&s| s == split)
+            .is_some_and(|i| self.train_splits[i]);
+        if joined { Split::Train } else { split }
+    }
 }
 
 impl Default for TensorOptions {
@@ -63,6 +78,7 @@ impl Default for TensorOptions {
             shard_frames: 2048,
             conditions: ConditionScaling::Bounded,
             nearest: false,
+            train_splits: [false; Split::ALL.len()],
         }
     }
 }
@@ -588,7 +604,7 @@ pub fn write_tensors(
     let mut template_frames = vec![BTreeMap::<String, usize>::new(); templates.len()];
     for split in Split::ALL.map(Split::name) {
         let members: Vec<usize> = (0..records.len())
-            .filter(|&i| records[i].sequence.split.name() == split)
+            .filter(|&i| options.lands_in(records[i].sequence.split).name() == split)
             .collect();
         if members.is_empty() {
             continue;
@@ -639,6 +655,12 @@ pub fn write_tensors(
         material_ranges: material,
         body_model: model.name().to_string(),
         splits: manifest_splits,
+        joined_to_train: Split::ALL
+            .iter()
+            .zip(options.train_splits)
+            .filter(|(_, joined)| *joined)
+            .map(|(s, _)| s.name().to_string())
+            .collect(),
         templates: templates
             .iter()
             .enumerate()

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::data::TrainingTensors;
 use crate::error::{Error, Result, bad_value};
-use crate::model::DitConfig;
+use crate::model::{DitConfig, Prediction};
 
 /// How rectified-flow times are drawn during training.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -91,6 +91,10 @@ pub struct TrainConfig {
     /// frame's simulated target map (normalized units, the targets' std is 1), standing in
     /// for the model's own errors, which is what it gets at prediction.
     pub previous_noise: f64,
+    /// With `model.previous_state`: the most frames the network is run on its own output
+    /// before a training sample (0: the simulated previous frame with noise only). Each
+    /// step unrolls a depth drawn from 0 to this, without gradients (`train/rollout.rs`).
+    pub rollout: usize,
 }
 
 impl Default for TrainConfig {
@@ -121,6 +125,7 @@ impl Default for TrainConfig {
             val_split: "test".into(),
             checkpoint_every: 100,
             previous_noise: 0.3,
+            rollout: 0,
         }
     }
 }
@@ -197,6 +202,9 @@ impl TrainConfig {
         if !(self.previous_noise.is_finite() && (0.0..=10.0).contains(&self.previous_noise)) {
             return bad("previous_noise", &self.previous_noise, "must be in [0, 10]");
         }
+        if self.rollout > 16 {
+            return bad("rollout", &self.rollout, "must be at most 16 frames");
+        }
         if self.val_frames > 100_000 {
             return bad("val_frames", &self.val_frames, "must be at most 100000");
         }
@@ -239,6 +247,24 @@ impl RunConfig {
     pub fn validate(&self) -> Result<()> {
         self.model.validate()?;
         self.training.validate()?;
+        let rollout = self.training.rollout;
+        if rollout > 0 && !self.model.previous_state {
+            return Err(bad_value(
+                "training.rollout",
+                rollout,
+                "needs model.previous_state = true (it unrolls the previous-state input)",
+            ));
+        }
+        let one_step = self.training.objective == Objective::Regression
+            && self.model.prediction == Prediction::Data;
+        if rollout > 0 && !one_step {
+            return Err(bad_value(
+                "training.rollout",
+                rollout,
+                "needs objective = \"regression\" and prediction = \"x0\" (an unrolled frame is \
+                 one network call)",
+            ));
+        }
         let bytes = self.training.batch as f64 * self.model.activation_bytes_per_sample() as f64;
         if bytes > MAX_ACTIVATION_BYTES {
             return Err(bad_value(

@@ -101,6 +101,21 @@ impl Batch {
         recipe: Recipe,
         rng: &mut ChaCha8Rng,
     ) -> Self {
+        Self::with_own_previous(tensors, split, frames, times, recipe, rng, &[])
+    }
+
+    /// [`Self::new`] where a previous-state model is given its own output for the frame
+    /// before: `own[i]`, the normalized map `[3, R, R]` it made, replaces frame `i`'s simulated
+    /// previous frame and its noise (frames past `own`'s end, or `None`, keep those).
+    pub fn with_own_previous(
+        tensors: &TrainingTensors,
+        split: &Frames,
+        frames: &[usize],
+        times: &[f32],
+        recipe: Recipe,
+        rng: &mut ChaCha8Rng,
+        own: &[Option<Vec<f32>>],
+    ) -> Self {
         let Recipe {
             inside_weight,
             prediction,
@@ -117,7 +132,7 @@ impl Batch {
             time: times.to_vec(),
             ..Self::default()
         };
-        for (&f, &s) in frames.iter().zip(times) {
+        for (i, (&f, &s)) in frames.iter().zip(times).enumerate() {
             let g = split.template[f];
             let z0 = &split.targets[f * 3 * plane..(f + 1) * 3 * plane];
             let mask = &tensors.masks[g * plane..(g + 1) * plane];
@@ -138,7 +153,12 @@ impl Batch {
                 b.position
                     .extend_from_slice(&split.bodies[at..at + body_channels * plane]);
             }
-            if let Some(spread) = previous_noise {
+            let own_map = own.get(i).and_then(Option::as_deref);
+            if let (Some(_), Some(map)) = (previous_noise, own_map) {
+                let stats = &tensors.manifest.normalization.targets;
+                b.position
+                    .extend(previous_state_map(Some(map), mask, stats));
+            } else if let Some(spread) = previous_noise {
                 let previous = split
                     .previous(f)
                     .map(|p| &split.targets[p * 3 * plane..(p + 1) * 3 * plane]);
@@ -173,6 +193,19 @@ impl Batch {
         recipe: Recipe,
         step: usize,
     ) -> Self {
+        Self::training_with(tensors, split, training, recipe, step, |_| Vec::new())
+    }
+
+    /// [`Self::training`] with the previous states `own` gives for the drawn frames (a
+    /// rollout's, [`Self::with_own_previous`]).
+    pub fn training_with(
+        tensors: &TrainingTensors,
+        split: &Frames,
+        training: &TrainConfig,
+        recipe: Recipe,
+        step: usize,
+        own: impl FnOnce(&[usize]) -> Vec<Option<Vec<f32>>>,
+    ) -> Self {
         let mut rng = generator(training.seed, TRAIN_STREAM, step as u64);
         let frames: Vec<usize> = (0..training.batch)
             .map(|_| rng.random_range(0..split.len()))
@@ -180,7 +213,8 @@ impl Batch {
         let times: Vec<f32> = (0..training.batch)
             .map(|_| time(&mut rng, training))
             .collect();
-        Self::new(tensors, split, &frames, &times, recipe, &mut rng)
+        let own = own(&frames);
+        Self::with_own_previous(tensors, split, &frames, &times, recipe, &mut rng, &own)
     }
 
     /// The model's inputs on `device`: noisy, position, mask, time, conditions.

@@ -12,6 +12,7 @@ mod batch;
 pub(crate) mod checkpoint;
 mod optim;
 mod reference;
+mod rollout;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -377,7 +378,14 @@ fn run_steps(
     let mut saved_at = net.state.step;
     while net.state.step < t.steps {
         let step = net.state.step;
-        let batch = Batch::training(&data.tensors, &data.train, t, data.recipe, step);
+        let batch = if t.rollout > 0 {
+            let unrolled = net.model.valid();
+            Batch::training_with(&data.tensors, &data.train, t, data.recipe, step, |frames| {
+                rollout::own_previous(&unrolled, data, frames, t, step, &options.device)
+            })
+        } else {
+            Batch::training(&data.tensors, &data.train, t, data.recipe, step)
+        };
         let (noisy, position, mask, time, conditions) = batch.inputs(device);
         let loss = batch.loss(net.model.forward(noisy, position, mask, time, conditions));
         let loss_value = f64::from(loss.clone().into_scalar::<f32>());
