@@ -12,6 +12,7 @@
 mod builtin;
 mod check;
 mod error;
+mod import;
 pub mod library;
 mod mesh;
 mod obj;
@@ -23,6 +24,9 @@ pub use check::{
     check_obj_file, repair, repair_numbered,
 };
 pub use error::{Error, Result};
+pub use import::{
+    median_edge_length, parse_ply, read_mesh, subdivide, unwrap_uvs, uv_overlap, weld,
+};
 pub use mesh::Garment;
 pub use obj::{parse_obj, read_obj, read_obj_numbered, write_mesh_obj, write_obj, write_ply};
 pub use pattern::{Pattern, SewnMesh, joined_roots};

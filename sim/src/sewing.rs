@@ -254,7 +254,16 @@ pub fn fit_to_body(positions: &[[f64; 3]], body: &[[f64; 3]]) -> Vec<[f64; 3]> {
 /// builds and its system factorizes (what `garments check` runs on a pattern, so that a
 /// pattern it passes does not fail `garments make` in the solver).
 pub fn preflight(model: &BodyModel, sewn: &SewnMesh, options: &SewingOptions) -> Result<()> {
-    first_solver(model, sewn, options).map(|_| ())
+    first_solver(model, sewn, options, Placement::PatternFrame).map(|_| ())
+}
+
+/// Where the garment's positions are when draping starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Placement {
+    /// In GarmentCode's frame, fitted to the body by [`fit_to_body`].
+    PatternFrame,
+    /// Already on the canonical body (a mesh imported and unposed).
+    OnTheBody,
 }
 
 /// The garment placed on the canonical body and the solver that closes its seams.
@@ -271,9 +280,13 @@ fn first_solver(
     model: &BodyModel,
     sewn: &SewnMesh,
     options: &SewingOptions,
+    placement: Placement,
 ) -> Result<FirstSolver> {
     let body = canonical_body(model)?;
-    let placed = fit_to_body(&sewn.garment.positions, &body.vertices);
+    let placed = match placement {
+        Placement::PatternFrame => fit_to_body(&sewn.garment.positions, &body.vertices),
+        Placement::OnTheBody => sewn.garment.positions.clone(),
+    };
     let rest: Vec<Vec3> = placed.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
     let mesh = ClothMesh::new(rest.clone(), sewn.garment.triangles.clone())?;
     let mut setup = ClothSetup::new(mesh.clone(), options.material);
@@ -313,6 +326,31 @@ pub fn sew(
     sewn: &SewnMesh,
     options: &SewingOptions,
 ) -> Result<(Garment, SewingReport)> {
+    sew_placed(model, sewn, options, Placement::PatternFrame)
+}
+
+/// Drapes `garment`, already placed on the default shape of `model` in its canonical pose (a
+/// mesh imported and unposed), as [`sew`] drapes a sewn pattern after its seams close: settled
+/// under gravity with cloth-cloth contact, its crossings untangled first, with the same gates.
+/// Its rest shape is the shape it is given.
+pub fn settle_on_body(
+    model: &BodyModel,
+    garment: &Garment,
+    options: &SewingOptions,
+) -> Result<(Garment, SewingReport)> {
+    let unsewn = SewnMesh {
+        garment: garment.clone(),
+        stitch_pairs: Vec::new(),
+    };
+    sew_placed(model, &unsewn, options, Placement::OnTheBody)
+}
+
+fn sew_placed(
+    model: &BodyModel,
+    sewn: &SewnMesh,
+    options: &SewingOptions,
+    placement: Placement,
+) -> Result<(Garment, SewingReport)> {
     let started = Instant::now();
     let FirstSolver {
         body,
@@ -320,7 +358,7 @@ pub fn sew(
         mesh,
         mut solver,
         params,
-    } = first_solver(model, sewn, options)?;
+    } = first_solver(model, sewn, options, placement)?;
     let body_vertices: Vec<Vec3> = body
         .vertices
         .iter()
@@ -337,7 +375,8 @@ pub fn sew(
     let initial_gap = gap(&state);
     solver.set_gravity_and_damping(0.0, 5.0);
     let mut frame = 0;
-    while frame < options.max_close_frames {
+    // Nothing to close without seams.
+    while frame < options.max_close_frames && !sewn.stitch_pairs.is_empty() {
         let ramp = (frame + 1) as f64 / options.close_frames.max(1) as f64;
         solver.set_seam_length_cap(initial_gap * (1.0 - ramp.min(1.0)));
         solver.advance_frame(&mut state, &mut obstacles, frame as f64 / FPS, frame)?;

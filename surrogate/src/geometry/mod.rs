@@ -14,5 +14,5 @@ pub use atlas::{Atlas, RESOLUTIONS, TexelSample};
 pub use canonical::{Canonical, RootRemoval};
 pub use maps::GeometryImage;
 pub use nearest::{PosedSurface, nearest_body};
-pub use skinning::{FOLDED_JOINTS, SMOOTHING_ROUNDS, Skinning};
+pub use skinning::{FOLDED_JOINTS, SMOOTHING_ROUNDS, Skinning, unpose};
 pub use target::{FrameBase, FrameBody, TargetKind, Targets};

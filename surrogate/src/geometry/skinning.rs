@@ -83,6 +83,91 @@ fn smooth(weights: &mut [[f64; NUM_JOINTS]], triangles: &[[u32; 3]], rounds: usi
     }
 }
 
+/// The canonical A-pose without root translation, the pose templates are made in.
+fn canonical_frame() -> FramePose {
+    FramePose {
+        pose: canonical_a_pose(),
+        transl: [0.0; 3],
+    }
+}
+
+/// A weight row's joints with weight above 1e-9.
+fn sparse(w: &[f64; NUM_JOINTS]) -> Vec<(usize, f64)> {
+    w.iter()
+        .enumerate()
+        .filter(|(_, x)| **x > 1e-9)
+        .map(|(j, x)| (j, *x))
+        .collect()
+}
+
+/// Per point, the skinning weights of its nearest vertex of `body` (the legs' folded into the
+/// pelvis with `fold`), smoothed `rounds` times over `triangles`, and that vertex.
+fn nearest_weights(
+    model: &BodyModel,
+    body: &[[f64; 3]],
+    points: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    rounds: usize,
+    fold: bool,
+) -> (Vec<[f64; NUM_JOINTS]>, Vec<u32>) {
+    let tree: ImmutableKdTree<f64, u32, 3, 32> = ImmutableKdTree::new_from_slice(body);
+    let mut dense = Vec::with_capacity(points.len());
+    let mut body_vertex = Vec::with_capacity(points.len());
+    for p in points {
+        let b = tree.nearest_one::<SquaredEuclidean>(p).item;
+        let mut w = [0.0; NUM_JOINTS];
+        for &(j, x) in model.skinning_weights(b as usize) {
+            let j = j as usize;
+            w[if fold && FOLDED_JOINTS.contains(&j) {
+                0
+            } else {
+                j
+            }] += x;
+        }
+        dense.push(w);
+        body_vertex.push(b);
+    }
+    smooth(&mut dense, triangles, rounds);
+    (dense, body_vertex)
+}
+
+/// A garment worn by the body of shape `shaped` posed by `frame` (`posed`, world, m) taken
+/// back to the default shape in the canonical A-pose, where templates rest: the inverse of
+/// [`Skinning::pose`], with weights from the nearest vertex of the posed body (legs folded,
+/// smoothed `rounds` times over `triangles`) and that vertex's shape offset removed. Pose
+/// blend shapes, where a body model has them, are not inverted.
+pub fn unpose(
+    model: &BodyModel,
+    posed: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    shaped: &ShapedBody,
+    frame: &FramePose,
+    rounds: usize,
+) -> Result<Vec<[f64; 3]>> {
+    let worn = model.pose(shaped, frame)?;
+    let at_frame = skinning_transforms(&worn.transforms, shaped);
+    let rest_shape = model.shape(&[])?;
+    let canonical = model.pose(&rest_shape, &canonical_frame())?;
+    let at_rest = skinning_transforms(&canonical.transforms, &rest_shape);
+    let (dense, body_vertex) =
+        nearest_weights(model, &worn.vertices, posed, triangles, rounds, true);
+    let rest = model.template();
+    Ok(posed
+        .iter()
+        .zip(&dense)
+        .zip(&body_vertex)
+        .map(|((y, w), &b)| {
+            let w = sparse(w);
+            let m = blend(&w, &at_frame);
+            let inverse = m.linear.try_inverse().unwrap_or_else(Matrix3::identity);
+            let b = b as usize;
+            let offset = Vector3::from(shaped.vertices[b]) - Vector3::from(rest[b]);
+            let t_pose = inverse * (Vector3::from(*y) - m.translation) - offset;
+            blend(&w, &at_rest).apply(t_pose).into()
+        })
+        .collect())
+}
+
 /// A template's skinning: per garment vertex its weights, its body vertex and its unposed
 /// (T-pose, betas 0) position.
 #[derive(Debug, Clone)]
@@ -118,40 +203,14 @@ impl Skinning {
         fold: bool,
     ) -> Result<Self> {
         let shaped = model.shape(&[])?;
-        let canonical = FramePose {
-            pose: canonical_a_pose(),
-            transl: [0.0; 3],
-        };
-        let body = model.pose(&shaped, &canonical)?;
-        let tree: ImmutableKdTree<f64, u32, 3, 32> =
-            ImmutableKdTree::new_from_slice(&body.vertices);
+        let body = model.pose(&shaped, &canonical_frame())?;
         let a = skinning_transforms(&body.transforms, &shaped);
-        let mut dense = Vec::with_capacity(template.len());
-        let mut body_vertex = Vec::with_capacity(template.len());
-        for p in template {
-            let b = tree.nearest_one::<SquaredEuclidean>(p).item;
-            let mut w = [0.0; NUM_JOINTS];
-            for &(j, x) in model.skinning_weights(b as usize) {
-                let j = j as usize;
-                w[if fold && FOLDED_JOINTS.contains(&j) {
-                    0
-                } else {
-                    j
-                }] += x;
-            }
-            dense.push(w);
-            body_vertex.push(b);
-        }
-        smooth(&mut dense, triangles, rounds);
+        let (dense, body_vertex) =
+            nearest_weights(model, &body.vertices, template, triangles, rounds, fold);
         let mut weights = Vec::with_capacity(template.len());
         let mut unposed = Vec::with_capacity(template.len());
         for (p, w) in template.iter().zip(&dense) {
-            let w: Vec<(usize, f64)> = w
-                .iter()
-                .enumerate()
-                .filter(|(_, x)| **x > 1e-9)
-                .map(|(j, x)| (j, *x))
-                .collect();
+            let w = sparse(w);
             let m = blend(&w, &a);
             let inverse = m.linear.try_inverse().unwrap_or_else(Matrix3::identity);
             unposed.push(inverse * (Vector3::from(*p) - m.translation));
@@ -233,5 +292,45 @@ mod tests {
         let posed = skinning.pose(&model, &shaped, &moved);
         let d = Vector3::from(posed[3]) - Vector3::from(template[3]);
         assert!((d - Vector3::new(0.5, 0.0, -1.0)).norm() < 1e-9, "{d}");
+    }
+
+    /// Unposing inverts skinning: points that follow their nearest body vertex, skinned to a
+    /// shaped body in a bent pose, come back to where they were on the canonical body.
+    #[test]
+    fn unposing_a_skinned_garment_gives_back_the_template() {
+        let model = BodyModel::default_body();
+        let body = model.pose(&model.shape(&[]).unwrap(), &canonical_frame()).unwrap();
+        // Points on upper-body vertices (above the hips, where no weight is folded).
+        let template: Vec<[f64; 3]> = body
+            .vertices
+            .iter()
+            .step_by(53)
+            .filter(|v| v[1] > 0.1)
+            .copied()
+            .collect();
+        assert!(template.len() > 50, "{} points", template.len());
+        let skinning = Skinning::new(&model, &template, &[], 0).unwrap();
+        let shaped = model.shape(&[1.5, -1.0, 0.5]).unwrap();
+        let mut pose = canonical_a_pose();
+        pose[3 * 16 + 2] -= 0.6; // the left shoulder raised
+        pose[3 * 3] += 0.3; // the spine bent forward
+        let frame = FramePose {
+            pose,
+            transl: [0.2, 0.1, -0.3],
+        };
+        let worn = skinning.pose(&model, &shaped, &frame);
+        let back = unpose(&model, &worn, &[], &shaped, &frame, 0).unwrap();
+        let worst = back
+            .iter()
+            .zip(&template)
+            .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
+            .fold(0.0, f64::max);
+        let moved = worn
+            .iter()
+            .zip(&template)
+            .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
+            .fold(0.0, f64::max);
+        assert!(moved > 0.2, "the pose moves the points ({moved} m)");
+        assert!(worst < 1e-6, "worst {worst} m");
     }
 }
