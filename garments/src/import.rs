@@ -397,7 +397,11 @@ mod tests {
         let after = median_edge_length(&g);
         assert!((after / before - 0.5).abs() < 0.1, "{before} -> {after}");
         g.validate().unwrap();
-        assert!(crate::check(&g).findings.is_empty(), "{:?}", crate::check(&g));
+        assert!(
+            crate::check(&g).findings.is_empty(),
+            "{:?}",
+            crate::check(&g)
+        );
         assert!(uv_overlap(&g) < 0.01);
     }
 
@@ -424,7 +428,11 @@ mod tests {
                 .map(|t| t.map(|v| m.positions[v as usize]))
                 .collect()
         };
-        assert_eq!(corners(&g), corners(&tube()), "the same triangles, renumbered");
+        assert_eq!(
+            corners(&g),
+            corners(&tube()),
+            "the same triangles, renumbered"
+        );
     }
 
     #[test]

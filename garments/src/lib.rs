@@ -20,8 +20,8 @@ pub mod pattern;
 
 pub use builtin::{BUILTIN, SkirtParams, builtin_names, skirt};
 pub use check::{
-    CheckReport, FileCheck, Finding, MAX_EXTENT_M, MIN_EXTENT_M, check, check_numbered,
-    check_obj_file, repair, repair_numbered,
+    CheckReport, FileCheck, Finding, MAX_EXTENT_M, MAX_TEMPLATE_VERTICES, MIN_EXTENT_M, check,
+    check_numbered, check_obj_file, repair, repair_numbered,
 };
 pub use error::{Error, Result};
 pub use import::{

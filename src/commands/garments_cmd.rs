@@ -1,4 +1,4 @@
-//! `garments list | show | make | check`.
+//! `garments list | show | make | import | check`.
 
 use std::path::Path;
 
@@ -22,8 +22,102 @@ pub fn run(command: GarmentsCommand) -> Result<()> {
             report,
             edge_length,
         } => make(&source, &out, report.as_deref(), edge_length),
+        GarmentsCommand::Import {
+            mesh,
+            motion,
+            frame,
+            betas,
+            out,
+            scale,
+            report,
+            model,
+        } => import(
+            &mesh,
+            &Worn {
+                motion: &motion,
+                frame,
+                betas: betas.as_deref(),
+                body_model: model.body_model.as_deref(),
+            },
+            &out,
+            scale,
+            report.as_deref(),
+        ),
         GarmentsCommand::Check { file, scale, json } => check(&file, scale, json.as_deref()),
     }
+}
+
+/// The body a mesh to import is worn by.
+struct Worn<'a> {
+    motion: &'a str,
+    frame: usize,
+    betas: Option<&'a [f64]>,
+    body_model: Option<&'a Path>,
+}
+
+fn import(mesh: &Path, worn: &Worn, out: &Path, scale: f64, report: Option<&Path>) -> Result<()> {
+    anyhow::ensure!(
+        scale.is_finite() && scale > 0.0,
+        "--scale {scale}: must be a positive number"
+    );
+    let model = sim::sources::body_model(worn.body_model)?;
+    let garment = garments::read_mesh(mesh)?;
+    // The motion's own shape where it carries one (AMASS files do) and none is given.
+    let unshaped = model.shape(&[])?;
+    let motion = sim::sources::motion(worn.motion, &model, &unshaped)?;
+    let betas: Vec<f64> = match (worn.betas, &motion.betas) {
+        (Some(b), _) => b.to_vec(),
+        (None, Some(b)) => b.clone(),
+        (None, None) => Vec::new(),
+    };
+    let shaped = model.shape(&betas)?;
+    let motion = sim::sources::motion(worn.motion, &model, &shaped)?;
+    let pose = motion.frames.get(worn.frame).with_context(|| {
+        format!(
+            "--frame {}: the motion '{}' has {} frames",
+            worn.frame,
+            worn.motion,
+            motion.frames.len()
+        )
+    })?;
+    eprintln!(
+        "{}: {} vertices, {} triangles; cleaning, unposing and draping ...",
+        mesh.display(),
+        garment.positions.len(),
+        garment.triangles.len()
+    );
+    let options = surrogate::import::ImportOptions {
+        scale,
+        ..Default::default()
+    };
+    let (template, made) =
+        surrogate::import::import_garment(&model, &garment, &shaped, pose, &options)
+            .with_context(|| format!("importing {}", mesh.display()))?;
+    sim::templates::write_template(out, &template)?;
+    say!(
+        "{}: {} vertices ({} welded, {} subdivisions), UVs {}; unposed {:.1} cm on average; \
+         inside {}, moving {:.1}%, max stretch {:.3}, self-intersections {}; {:.1} s -> {}",
+        mesh.display(),
+        made.drape.vertices,
+        made.welded,
+        made.subdivisions,
+        made.uvs,
+        100.0 * made.unposed_mean_m,
+        made.drape.verts_inside,
+        100.0 * made.drape.moving_fraction,
+        made.drape.max_edge_stretch,
+        made.drape.self_intersections,
+        made.drape.drape_s,
+        out.display()
+    );
+    if let Some(path) = report {
+        write_json(path, &made)?;
+    }
+    if !made.drape.gates_passed {
+        bail!("quality gates failed: {}", made.drape.failed.join("; "));
+    }
+    say!("gates passed");
+    Ok(())
 }
 
 fn unknown(name: &str) -> anyhow::Error {

@@ -101,7 +101,8 @@ fn check_outputs(command: &Command) -> Result<()> {
                 (vec![json.as_deref()], vec![])
             }
             GarmentsCommand::Show { pattern_out, .. } => (vec![pattern_out.as_deref()], vec![]),
-            GarmentsCommand::Make { out, report, .. } => {
+            GarmentsCommand::Make { out, report, .. }
+            | GarmentsCommand::Import { out, report, .. } => {
                 (vec![Some(out.as_path()), report.as_deref()], vec![])
             }
         },

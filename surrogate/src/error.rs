@@ -145,6 +145,9 @@ pub enum Error {
     /// Inputs or settings that cannot be used, said in words.
     #[error("{0}")]
     Invalid(String),
+    /// A garment mesh that cannot be used.
+    #[error(transparent)]
+    Garment(#[from] garments::Error),
     /// An engine error (recordings, metrics).
     #[error(transparent)]
     Sim(#[from] sim::Error),

@@ -15,6 +15,7 @@ mod error;
 pub mod evaluate;
 pub mod flow;
 pub mod geometry;
+pub mod import;
 pub mod model;
 pub mod noise;
 pub mod predict;

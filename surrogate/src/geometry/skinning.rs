@@ -299,7 +299,9 @@ mod tests {
     #[test]
     fn unposing_a_skinned_garment_gives_back_the_template() {
         let model = BodyModel::default_body();
-        let body = model.pose(&model.shape(&[]).unwrap(), &canonical_frame()).unwrap();
+        let body = model
+            .pose(&model.shape(&[]).unwrap(), &canonical_frame())
+            .unwrap();
         // Points on upper-body vertices (above the hips, where no weight is folded).
         let template: Vec<[f64; 3]> = body
             .vertices

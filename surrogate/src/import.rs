@@ -1,0 +1,149 @@
+//! A user's own garment made a template (`garments import`): a mesh (a scan, an artist's
+//! garment, a frame of a capture) as worn by a body of known shape at one frame of a known
+//! motion becomes a template on the default body in its canonical A-pose, which `predict`
+//! takes like a library design's.
+//!
+//! Stages, in order: the mesh cleaned (coincident vertices welded, then the documented repairs
+//! of [`garments::repair`], which refuse non-manifold edges and the like by name); made fine
+//! enough for the engine (split into four until its median edge is at most twice the
+//! library's); unposed and unshaped by the inverse of the skinning the surrogate predicts on
+//! ([`crate::geometry::unpose`]); settled on the canonical body by the engine with the gates
+//! of sewing ([`sim::sewing::settle_on_body`]); given UVs where it has none or its charts
+//! overlap ([`garments::unwrap_uvs`]).
+
+use garments::Garment;
+use motions::{BodyModel, FramePose, ShapedBody};
+use serde::Serialize;
+use sim::sewing::{SewingOptions, SewingReport, settle_on_body};
+
+use crate::error::{Error, Result};
+use crate::geometry::{SMOOTHING_ROUNDS, unpose};
+
+/// How a mesh is imported.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImportOptions {
+    /// Factor the file's positions are multiplied by (0.01 for a file in cm).
+    pub scale: f64,
+    /// Vertices closer than this are welded into one, m.
+    pub weld_m: f64,
+    /// The largest fraction of the UV area covered twice that is kept; past it the mesh is
+    /// unwrapped again.
+    pub max_uv_overlap: f64,
+    /// Median edge length the mesh is subdivided down to (at most twice this), m.
+    pub edge_length_m: f64,
+    /// The drape on the canonical body.
+    pub sewing: SewingOptions,
+}
+
+impl Default for ImportOptions {
+    fn default() -> Self {
+        Self {
+            scale: 1.0,
+            weld_m: 1e-6,
+            max_uv_overlap: 0.01,
+            edge_length_m: garments::pattern::DEFAULT_EDGE_LENGTH_M,
+            sewing: SewingOptions::default(),
+        }
+    }
+}
+
+/// What importing did, stage by stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImportReport {
+    /// Vertices and triangles as read.
+    pub vertices_read: usize,
+    /// Triangles as read (polygons fanned).
+    pub triangles_read: usize,
+    /// Vertices welded into others.
+    pub welded: usize,
+    /// The repairs made, one line each.
+    pub repairs: Vec<String>,
+    /// Times every triangle was split into four.
+    pub subdivisions: usize,
+    /// Median edge length after subdividing, m.
+    pub median_edge_m: f64,
+    /// `kept`, or why new UVs were unwrapped (`none`, `overlapping`).
+    pub uvs: String,
+    /// Fraction of the file's UV area covered twice (1 without UVs).
+    pub uv_overlap_read: f64,
+    /// Mean distance each vertex moved from the worn pose to the canonical body, m.
+    pub unposed_mean_m: f64,
+    /// The drape's gates and figures.
+    pub drape: SewingReport,
+}
+
+/// Makes `mesh`, worn by the body `shaped` posed by `frame`, a template on `model`'s default
+/// body in its canonical pose. A mesh that cannot be repaired, or one that the engine cannot
+/// drape, is an error naming the fault; a drape whose gates fail is reported, not raised.
+pub fn import_garment(
+    model: &BodyModel,
+    mesh: &Garment,
+    shaped: &ShapedBody,
+    frame: &FramePose,
+    options: &ImportOptions,
+) -> Result<(Garment, ImportReport)> {
+    let (vertices_read, triangles_read) = (mesh.positions.len(), mesh.triangles.len());
+    let uv_overlap_read = garments::uv_overlap(mesh);
+    let mut g = mesh.clone();
+    if g.panels.is_empty() {
+        g.panels.push(g.name.clone());
+        g.triangle_panels = vec![0; g.triangles.len()];
+    }
+    for p in &mut g.positions {
+        *p = p.map(|c| c * options.scale);
+    }
+    let welded = garments::weld(&mut g, options.weld_m);
+    // Without UVs the repairs refuse the mesh; one UV per vertex stands in until the unwrap.
+    let needs_uvs = g.uv_triangles.len() != g.triangles.len();
+    if needs_uvs {
+        g.uvs = vec![[0.0; 2]; g.positions.len()];
+        g.uv_triangles = g.triangles.clone();
+    }
+    let (mut g, repairs) = garments::repair(&g, 1.0)?;
+    let mut subdivisions = 0;
+    while garments::median_edge_length(&g) > 2.0 * options.edge_length_m {
+        if 4 * g.positions.len() > garments::MAX_TEMPLATE_VERTICES {
+            return Err(Error::Invalid(format!(
+                "'{}': its edges (median {:.1} cm) are too long for the engine and splitting them \
+                 would pass {} vertices",
+                g.name,
+                100.0 * garments::median_edge_length(&g),
+                garments::MAX_TEMPLATE_VERTICES
+            )));
+        }
+        garments::subdivide(&mut g);
+        subdivisions += 1;
+    }
+    let uvs = if needs_uvs {
+        "none"
+    } else if garments::uv_overlap(&g) > options.max_uv_overlap {
+        "overlapping"
+    } else {
+        "kept"
+    };
+    if uvs != "kept" {
+        garments::unwrap_uvs(&mut g)?;
+    }
+    let worn = g.positions.clone();
+    g.positions = unpose(model, &worn, &g.triangles, shaped, frame, SMOOTHING_ROUNDS)?;
+    let unposed_mean_m = worn
+        .iter()
+        .zip(&g.positions)
+        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
+        .sum::<f64>()
+        / worn.len().max(1) as f64;
+    let (template, drape) = settle_on_body(model, &g, &options.sewing)?;
+    let report = ImportReport {
+        vertices_read,
+        triangles_read,
+        welded,
+        repairs,
+        subdivisions,
+        median_edge_m: garments::median_edge_length(&template),
+        uvs: uvs.to_string(),
+        uv_overlap_read,
+        unposed_mean_m,
+        drape,
+    };
+    Ok((template, report))
+}
