@@ -31,6 +31,7 @@ mod spin_join;
 mod system;
 pub mod templates;
 mod untangle;
+pub mod unwind;
 
 pub use cloth::{ClothMesh, ClothState, Vec3};
 pub use config::SceneConfig;

@@ -258,12 +258,16 @@ pub fn preflight(model: &BodyModel, sewn: &SewnMesh, options: &SewingOptions) ->
 }
 
 /// Where the garment's positions are when draping starts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Placement {
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Placement<'a> {
     /// In GarmentCode's frame, fitted to the body by [`fit_to_body`].
     PatternFrame,
-    /// Already on the canonical body (a mesh imported and unposed).
-    OnTheBody,
+    /// Already on the canonical body (a mesh imported and unposed): its positions are its rest
+    /// shape, and it starts at `start`.
+    OnTheBody {
+        /// Where each vertex starts, m.
+        start: &'a [[f64; 3]],
+    },
 }
 
 /// The garment placed on the canonical body and the solver that closes its seams.
@@ -285,7 +289,7 @@ fn first_solver(
     let body = canonical_body(model)?;
     let placed = match placement {
         Placement::PatternFrame => fit_to_body(&sewn.garment.positions, &body.vertices),
-        Placement::OnTheBody => sewn.garment.positions.clone(),
+        Placement::OnTheBody { .. } => sewn.garment.positions.clone(),
     };
     let rest: Vec<Vec3> = placed.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
     let mesh = ClothMesh::new(rest.clone(), sewn.garment.triangles.clone())?;
@@ -329,20 +333,31 @@ pub fn sew(
     sew_placed(model, sewn, options, Placement::PatternFrame)
 }
 
-/// Drapes `garment`, already placed on the default shape of `model` in its canonical pose (a
-/// mesh imported and unposed), as [`sew`] drapes a sewn pattern after its seams close: settled
-/// under gravity with cloth-cloth contact, its crossings untangled first, with the same gates.
-/// Its rest shape is the shape it is given.
+/// Drapes `garment` on the default shape of `model` in its canonical pose (a mesh imported and
+/// unposed) as [`sew`] drapes a sewn pattern after its seams close: settled under gravity with
+/// cloth-cloth contact, its crossings untangled first, with the same gates. Its rest shape is
+/// `garment`'s positions; it starts at `start` (one position per vertex).
 pub fn settle_on_body(
     model: &BodyModel,
     garment: &Garment,
+    start: &[[f64; 3]],
     options: &SewingOptions,
 ) -> Result<(Garment, SewingReport)> {
+    if start.len() != garment.positions.len() {
+        return Err(Error::Garment {
+            garment: garment.name.clone(),
+            problem: format!(
+                "{} start positions for {} vertices",
+                start.len(),
+                garment.positions.len()
+            ),
+        });
+    }
     let unsewn = SewnMesh {
         garment: garment.clone(),
         stitch_pairs: Vec::new(),
     };
-    sew_placed(model, &unsewn, options, Placement::OnTheBody)
+    sew_placed(model, &unsewn, options, Placement::OnTheBody { start })
 }
 
 fn sew_placed(
@@ -367,6 +382,9 @@ fn sew_placed(
     let body_obstacle = AnimatedMesh::new(&body_vertices, model.faces(), options.friction)?;
     let mut obstacles = Obstacles::body(body_obstacle);
     let mut state = ClothState::at_rest(rest);
+    if let Placement::OnTheBody { start } = placement {
+        state.positions = start.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+    }
     let gap = |state: &ClothState| {
         let p: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
         sewn.max_seam_gap(&p)

@@ -7,17 +7,52 @@
 //! of [`garments::repair`], which refuse non-manifold edges and the like by name); made fine
 //! enough for the engine (split into four until its median edge is at most twice the
 //! library's); unposed and unshaped by the inverse of the skinning the surrogate predicts on
-//! ([`crate::geometry::unpose`]); settled on the canonical body by the engine with the gates
-//! of sewing ([`sim::sewing::settle_on_body`]); given UVs where it has none or its charts
-//! overlap ([`garments::unwrap_uvs`]).
+//! ([`crate::geometry::unpose`]), which gives its rest shape; carried back from the worn pose
+//! and shape to the canonical ones by the engine, the body blended over
+//! [`UNWIND_FRAMES`] frames as a simulation's blend-in blends it forward
+//! ([`sim::unwind::unwind`]); settled there with the gates of sewing
+//! ([`sim::sewing::settle_on_body`]); given UVs where it has none or its charts overlap
+//! ([`garments::unwrap_uvs`]).
 
 use garments::Garment;
-use motions::{BodyModel, FramePose, ShapedBody};
+use motions::{BlendIn, BodyModel, FramePose, Motion, ShapedBody, canonical_a_pose};
 use serde::Serialize;
 use sim::sewing::{SewingOptions, SewingReport, settle_on_body};
 
 use crate::error::{Error, Result};
 use crate::geometry::{SMOOTHING_ROUNDS, unpose};
+
+/// Frames the body takes from the worn pose and shape back to the canonical ones (a second, as
+/// `simulate`'s default blend-in).
+pub const UNWIND_FRAMES: usize = 30;
+
+/// The body's vertices from `frame` with `shaped`'s betas back to the canonical A-pose with
+/// none, over [`UNWIND_FRAMES`] frames (smoothstep, the root kept where `frame` has it).
+fn unwinding_bodies(
+    model: &BodyModel,
+    shaped: &ShapedBody,
+    frame: &FramePose,
+) -> Result<Vec<Vec<[f64; 3]>>> {
+    let blend = BlendIn {
+        blend_frames: UNWIND_FRAMES,
+        settle_frames: 0,
+    };
+    let forward =
+        Motion::new("unwind", 30.0, vec![*frame])?.with_blend_in(&canonical_a_pose(), blend);
+    let last = forward.frames.len() - 1;
+    forward
+        .frames
+        .iter()
+        .enumerate()
+        .rev()
+        .map(|(k, pose)| {
+            let u = k as f64 / last as f64;
+            let share = u * u * (3.0 - 2.0 * u);
+            let betas: Vec<f64> = shaped.betas.iter().map(|b| b * share).collect();
+            Ok(model.pose(&model.shape(&betas)?, pose)?.vertices)
+        })
+        .collect()
+}
 
 /// How a mesh is imported.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,7 +101,7 @@ pub struct ImportReport {
     pub uvs: String,
     /// Fraction of the file's UV area covered twice (1 without UVs).
     pub uv_overlap_read: f64,
-    /// Mean distance each vertex moved from the worn pose to the canonical body, m.
+    /// Mean distance from each worn vertex to where unwinding left it on the canonical body, m.
     pub unposed_mean_m: f64,
     /// The drape's gates and figures.
     pub drape: SewingReport,
@@ -126,13 +161,27 @@ pub fn import_garment(
     }
     let worn = g.positions.clone();
     g.positions = unpose(model, &worn, &g.triangles, shaped, frame, SMOOTHING_ROUNDS)?;
+    let bodies = unwinding_bodies(model, shaped, frame)?;
+    let unwound = sim::unwind::unwind(
+        model,
+        &g.positions,
+        &g.triangles,
+        &worn,
+        &bodies,
+        &options.sewing,
+    )?;
+    // The canonical body at the frame's root translation, moved to the origin.
+    let start: Vec<[f64; 3]> = unwound
+        .iter()
+        .map(|p| [0, 1, 2].map(|k| p[k] - frame.transl[k]))
+        .collect();
     let unposed_mean_m = worn
         .iter()
-        .zip(&g.positions)
+        .zip(&start)
         .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
         .sum::<f64>()
         / worn.len().max(1) as f64;
-    let (template, drape) = settle_on_body(model, &g, &options.sewing)?;
+    let (template, drape) = settle_on_body(model, &g, &start, &options.sewing)?;
     let report = ImportReport {
         vertices_read,
         triangles_read,
