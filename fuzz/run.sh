@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-30}"
 bin="${DIT_GARMENT_BIN:?set DIT_GARMENT_BIN to the dit-garment binary}"
-targets=(recording obj pattern npz spec scene_config bvh model_run ensemble checkpoint)
+targets=(recording obj ply pattern npz spec scene_config bvh model_run ensemble checkpoint)
 shared=../../shared/testdata
 mkdir -p "${targets[@]/#/corpus/}"
 seeds=$(mktemp -d)
@@ -22,6 +22,9 @@ cp "$(ls "$seeds"/objs/*.obj | head -1)" corpus/obj/seed_frame.obj
 printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\ng a\nf 1/1 2/2 3/3 4/4\n' \
   >corpus/obj/seed_quad.obj
 "$bin" garments show tank_tight --pattern-out corpus/pattern/seed_tank_tight.json >/dev/null
+"$bin" garments make tank_tight --edge-length 0.05 --out corpus/ply/seed_tank_tight.ply >/dev/null || true
+printf 'ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n' \
+  >corpus/ply/seed_quad.ply
 "$bin" synth --example-spec tiny >corpus/spec/seed_tiny.toml
 "$bin" simulate --print-config >corpus/scene_config/seed_default.toml
 if [ -d "$shared" ]; then
