@@ -371,9 +371,11 @@ pub struct RegressArgs {
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// Ground-truth recording.
+    /// Ground truth: a recording, or a folder of a capture's frames (`.obj` or `.ply` meshes
+    /// of any topology, frame k the k-th file by name), scored by the correspondence-free
+    /// metrics alone.
     pub a: PathBuf,
-    /// Recording to score (same garment template).
+    /// Recording to score (the same garment template as a recording A).
     pub b: PathBuf,
     /// Body model the recordings were made with (default body if omitted); used to rebuild the
     /// body for E_c when the recordings do not carry body vertices.
@@ -383,7 +385,8 @@ pub struct CompareArgs {
     #[arg(long)]
     pub per_frame: bool,
     /// Write `E_v`, `E_CD`, `E_CD_cm`, `E_n`, `E_c`, `E_c_vertex`, `E_b`, `E_s`, `E_d`,
-    /// `frames_scored` (and units, per-frame scores) here.
+    /// `frames_scored` (and units, per-frame scores) here; against a capture, `E_CD`,
+    /// `E_CD_cm`, `E_n`, `E_c`, `E_c_vertex`, `distance_p90_cm` and `not_applicable`.
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Seed of the surface samples.

@@ -21,7 +21,12 @@ pub const FRAME_STRIDE: usize = 5;
 
 type P3 = [f64; 3];
 
+mod capture;
 mod compare;
+pub use capture::{
+    CaptureCompared, CaptureScores, NOT_APPLICABLE, capture_frames, compare_with_capture,
+    score_frame as score_capture_frame,
+};
 pub use compare::{Compared, compare, compare_recordings};
 type Tree = ImmutableKdTree<f64, u32, 3, 32>;
 
