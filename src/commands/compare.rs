@@ -17,7 +17,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
     let c = compare_recordings(&args.a, &args.b, &model, args.seed)?;
     if args.per_frame {
-        print_frames(c.per_frame.iter().map(|(k, s)| (*k, s.values().to_vec())));
+        print_frames(c.per_frame.iter().map(|(k, s)| (*k, s.values().to_vec())))?;
     }
     say!(
         "{} scored against {} ({} frames, every {FRAME_STRIDE}th):",
@@ -59,7 +59,7 @@ fn against_capture(args: &CompareArgs, model: &motions::BodyModel) -> Result<()>
     let b = sim::recording::Recording::read(&args.b)?;
     let c = sim::metrics::compare_with_capture(&args.a, &b, &args.b, model, args.seed)?;
     if args.per_frame {
-        print_frames(c.per_frame.iter().map(|(k, s)| (*k, s.values().to_vec())));
+        print_frames(c.per_frame.iter().map(|(k, s)| (*k, s.values().to_vec())))?;
     }
     say!(
         "{} scored against the capture {} ({} frames, every {FRAME_STRIDE}th; another topology):",
@@ -100,9 +100,10 @@ fn against_capture(args: &CompareArgs, model: &motions::BodyModel) -> Result<()>
 }
 
 /// One line per scored frame: its index and its values.
-fn print_frames(rows: impl Iterator<Item = (usize, Vec<f64>)>) {
+fn print_frames(rows: impl Iterator<Item = (usize, Vec<f64>)>) -> Result<()> {
     for (k, values) in rows {
         let cells: Vec<String> = values.iter().map(|v| format!("{v:9.4}")).collect();
         say!("frame {k:5}: {}", cells.join(" "));
     }
+    Ok(())
 }
