@@ -183,7 +183,12 @@ pub fn weld(g: &mut Garment, tolerance: f64) -> usize {
         'search: for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let near = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]);
+                    let cell = [
+                        k[0].saturating_add(dx),
+                        k[1].saturating_add(dy),
+                        k[2].saturating_add(dz),
+                    ];
+                    let near = grid.get(&cell);
                     for &j in near.into_iter().flatten() {
                         let q = kept[j as usize];
                         let d2: f64 = (0..3).map(|a| (p[a] - q[a]).powi(2)).sum();
@@ -421,6 +426,11 @@ mod tests {
         g.positions = soup;
         let gone = weld(&mut g, 1e-6);
         assert_eq!(g.positions.len(), n);
+        // Coordinates past any grid cell (a hostile file) weld without overflowing.
+        let mut far = tube();
+        far.positions[0] = [1e300, -1e300, f64::NAN];
+        far.positions[1] = [1e300, -1e300, 0.0];
+        weld(&mut far, 1e-6);
         assert_eq!(gone, 3 * t - n);
         let corners = |m: &Garment| -> Vec<[[f64; 3]; 3]> {
             m.triangles
