@@ -160,69 +160,8 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
     ok(&synth_args(spec.to_str().unwrap(), &clean, &[]));
     let reference = manifest(&clean);
     assert_eq!(reference.len(), 8);
-
     let killed = dir.path().join("killed");
-    // Kills at random moments: the first while the template is made, the others after a given
-    // number of sequences have finished plus a random delay, so they land while recordings
-    // and records are being written. The moments come from a seed, printed (and given in
-    // every failure) so a failure can be replayed with DIT_GARMENT_KILL_SEED.
-    let seed: u64 = match std::env::var("DIT_GARMENT_KILL_SEED") {
-        Ok(s) => s.parse().expect("DIT_GARMENT_KILL_SEED is a number"),
-        Err(_) => std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap()
-            .subsec_nanos() as u64,
-    };
-    eprintln!("kill seed {seed} (replay: DIT_GARMENT_KILL_SEED={seed})");
-    let mut state = seed | 1;
-    let mut random_ms = |range: u64| {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 33) % range
-    };
-    let records = |d: &Path| {
-        files_in(&d.join("records"))
-            .iter()
-            .filter(|n| n.ends_with(".json"))
-            .count()
-    };
-    let mut partial_runs = 0;
-    for finished_before_kill in [0usize, 1, 3, 5, 6] {
-        let before = records(&killed);
-        let mut child = binary()
-            .args(synth_args(spec.to_str().unwrap(), &killed, &[]))
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let started = Instant::now();
-        while records(&killed) < finished_before_kill
-            && child.try_wait().unwrap().is_none()
-            && started.elapsed() < Duration::from_secs(120)
-        {
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        let delay = Duration::from_millis(random_ms(if finished_before_kill == 0 {
-            2500
-        } else {
-            400
-        }));
-        std::thread::sleep(delay);
-        let _ = child.kill(); // SIGKILL
-        let _ = child.wait();
-        let after = records(&killed);
-        eprintln!(
-            "kill after {finished_before_kill} records + {delay:?}: records {before} -> {after}"
-        );
-        if after > before && after < 8 {
-            partial_runs += 1;
-        }
-    }
-    assert!(
-        partial_runs >= 1,
-        "no kill landed in the middle of the simulations (kill seed {seed})"
-    );
+    let seed = kill_repeatedly(&spec, &killed);
     let last = ok(&synth_args(spec.to_str().unwrap(), &killed, &[]));
     eprintln!("{last}");
     ok(&["dataset", "verify", killed.to_str().unwrap()]);
@@ -271,6 +210,72 @@ fn killed_runs_resume_without_losing_or_duplicating_and_match_an_uninterrupted_r
     let redo = ok(&synth_args(spec.to_str().unwrap(), &killed, &[]));
     assert!(redo.contains("7 already done"), "{redo}");
     ok(&["dataset", "verify", killed.to_str().unwrap()]);
+}
+
+/// Kills synthesis into `killed` at random moments: the first while the template is made, the
+/// others after a given number of sequences have finished plus a random delay, so they land
+/// while recordings and records are being written. The moments come from a seed, printed
+/// (and returned, for every failure's message) so a failure can be replayed with
+/// DIT_GARMENT_KILL_SEED.
+fn kill_repeatedly(spec: &Path, killed: &Path) -> u64 {
+    let seed: u64 = match std::env::var("DIT_GARMENT_KILL_SEED") {
+        Ok(s) => s.parse().expect("DIT_GARMENT_KILL_SEED is a number"),
+        Err(_) => std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .subsec_nanos() as u64,
+    };
+    eprintln!("kill seed {seed} (replay: DIT_GARMENT_KILL_SEED={seed})");
+    let mut state = seed | 1;
+    let mut random_ms = |range: u64| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 33) % range
+    };
+    let records = |d: &Path| {
+        files_in(&d.join("records"))
+            .iter()
+            .filter(|n| n.ends_with(".json"))
+            .count()
+    };
+    let mut partial_runs = 0;
+    for finished_before_kill in [0usize, 1, 3, 5, 6] {
+        let before = records(killed);
+        let mut child = binary()
+            .args(synth_args(spec.to_str().unwrap(), killed, &[]))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let started = Instant::now();
+        while records(killed) < finished_before_kill
+            && child.try_wait().unwrap().is_none()
+            && started.elapsed() < Duration::from_secs(120)
+        {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let delay = Duration::from_millis(random_ms(if finished_before_kill == 0 {
+            2500
+        } else {
+            400
+        }));
+        std::thread::sleep(delay);
+        let _ = child.kill(); // SIGKILL
+        let _ = child.wait();
+        let after = records(killed);
+        eprintln!(
+            "kill after {finished_before_kill} records + {delay:?}: records {before} -> {after}"
+        );
+        if after > before && after < 8 {
+            partial_runs += 1;
+        }
+    }
+    assert!(
+        partial_runs >= 1,
+        "no kill landed in the middle of the simulations (kill seed {seed})"
+    );
+    seed
 }
 
 #[test]

@@ -19,71 +19,86 @@ fn fixture() -> &'static TinyRun {
     FIXTURE.get_or_init(|| tiny_run("ensemble-test", &[], &tiny_config("", "")))
 }
 
+/// The fixture's run trained again with seed 1, made once.
+fn second_member() -> &'static Path {
+    static SECOND: OnceLock<std::path::PathBuf> = OnceLock::new();
+    SECOND.get_or_init(|| {
+        let f = fixture();
+        let other = f.dir.join("run-seed1");
+        if !other.join("model.safetensors").exists() {
+            let config = f.dir.join("m-seed1.toml");
+            std::fs::write(&config, tiny_config("", "seed = 1\n")).unwrap();
+            let tensors = f.dir.join("tensors");
+            ok(&[
+                "train",
+                "--data",
+                s(&tensors),
+                "--out",
+                s(&other),
+                "--config",
+                s(&config),
+                "--threads",
+                "1",
+                "--quiet",
+            ]);
+        }
+        other
+    })
+}
+
+/// Writes `ensemble.toml` in `folder` naming `runs`.
+fn name_members(folder: &Path, runs: &[&Path]) {
+    let names: Vec<String> = runs.iter().map(|r| format!("{:?}", s(r))).collect();
+    std::fs::write(
+        folder.join("ensemble.toml"),
+        format!("members = [{}]\n", names.join(", ")),
+    )
+    .unwrap();
+}
+
+/// `predict` of the fixture's truth with `model` into `out`, without guidance (sampling is
+/// then linear in the network's output).
+fn predict_args(model: &Path, out: &Path) -> Vec<String> {
+    [
+        "predict",
+        "--model",
+        s(model),
+        "--config-from",
+        s(&fixture().truth),
+        "--out",
+        s(out),
+        "--guidance",
+        "0",
+        "--guidance-refine",
+        "0",
+        "--quiet",
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn strs(args: &[String]) -> Vec<&str> {
+    args.iter().map(|a| a.as_str()).collect()
+}
+
 /// An ensemble folder of two runs (the fixture's and one trained with another seed) predicts
-/// the mean of their predictions where sampling is linear (no guidance), and a bad ensemble
-/// file is named: too few members, members trained on other tensors.
+/// the mean of their predictions where sampling is linear (no guidance).
 #[test]
 fn an_ensemble_predicts_the_mean_of_its_members() {
     let f = fixture();
-    let other = f.dir.join("run-seed1");
-    if !other.join("model.safetensors").exists() {
-        let config = f.dir.join("m-seed1.toml");
-        std::fs::write(&config, tiny_config("", "seed = 1\n")).unwrap();
-        let tensors = f.dir.join("tensors");
-        ok(&[
-            "train",
-            "--data",
-            s(&tensors),
-            "--out",
-            s(&other),
-            "--config",
-            s(&config),
-            "--threads",
-            "1",
-            "--quiet",
-        ]);
-    }
+    let other = second_member();
     let dir = tempfile::tempdir().unwrap();
     let ensemble = dir.path().join("pair");
     std::fs::create_dir_all(&ensemble).unwrap();
-    let members = |runs: &[&Path]| {
-        let names: Vec<String> = runs.iter().map(|r| format!("{:?}", s(r))).collect();
-        std::fs::write(
-            ensemble.join("ensemble.toml"),
-            format!("members = [{}]\n", names.join(", ")),
-        )
-        .unwrap();
-    };
-    let args = |model: &Path, out: &Path| -> Vec<String> {
-        [
-            "predict",
-            "--model",
-            s(model),
-            "--config-from",
-            s(&f.truth),
-            "--out",
-            s(out),
-            "--guidance",
-            "0",
-            "--guidance-refine",
-            "0",
-            "--quiet",
-        ]
-        .map(String::from)
-        .to_vec()
-    };
     let run = |model: &Path, name: &str| {
         let out = dir.path().join(name);
-        ok(&args(model, &out)
-            .iter()
-            .map(|a| a.as_str())
-            .collect::<Vec<_>>());
+        ok(&strs(&predict_args(model, &out)));
         Recording::read(&out).unwrap().garment
     };
-    members(&[&f.run, &other]);
+    name_members(&ensemble, &[&f.run, other]);
     let (a, b, pair) = (
         run(&f.run, "a.mcap"),
-        run(&other, "b.mcap"),
+        run(other, "b.mcap"),
         run(&ensemble, "pair.mcap"),
     );
     let (mut apart, mut off) = (0.0f32, 0.0f32);
@@ -103,19 +118,24 @@ fn an_ensemble_predicts_the_mean_of_its_members() {
         off < 1e-5,
         "the ensemble is {off} m from the mean of its members"
     );
+}
 
+/// A bad ensemble file is named, with nothing written: too few members, members trained on
+/// other tensors.
+#[test]
+fn a_bad_ensemble_is_named_and_nothing_written() {
+    let f = fixture();
+    let other = second_member();
+    let dir = tempfile::tempdir().unwrap();
+    let ensemble = dir.path().join("pair");
+    std::fs::create_dir_all(&ensemble).unwrap();
     let out = dir.path().join("bad.mcap");
     let failure = || {
-        let e = fails(
-            &args(&ensemble, &out)
-                .iter()
-                .map(|a| a.as_str())
-                .collect::<Vec<_>>(),
-        );
+        let e = fails(&strs(&predict_args(&ensemble, &out)));
         assert!(!out.exists(), "{} was written", out.display());
         e
     };
-    members(&[&f.run]);
+    name_members(&ensemble, &[&f.run]);
     let e = failure();
     assert!(
         e.contains("ensemble.toml") && e.contains("at least 2"),
@@ -128,7 +148,7 @@ fn an_ensemble_predicts_the_mean_of_its_members() {
     }
     let manifest = std::fs::read_to_string(retrained.join("tensors.json")).unwrap();
     std::fs::write(retrained.join("tensors.json"), format!("{manifest}\n")).unwrap();
-    members(&[&f.run, &retrained]);
+    name_members(&ensemble, &[&f.run, &retrained]);
     let e = failure();
     assert!(
         e.contains("tensors.json") && e.contains("same tensors"),

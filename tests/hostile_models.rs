@@ -110,17 +110,9 @@ fn predict_fails(model: &Path, out: &Path) -> String {
     ])
 }
 
-/// A model folder whose statistics, size or ensemble list cannot be right is refused at load,
-/// naming the file and the value, before any prediction: `tensors.json` with a zero, negative
-/// or huge deviation, a huge mean, an empty material range or an unknown format; a
-/// `config.toml` of a network far larger than its weights (refused before it is built); an
-/// ensemble naming one run twice. `evaluate` with nothing to score says so.
-#[test]
-fn model_folders_that_cannot_be_right_are_refused_at_load() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("p.mcap");
-    let predict = |model: &Path| predict_fails(model, &out);
-    let spoils = [
+/// Spoiled values of a run's `tensors.json`: (JSON pointer, the value, words of the error).
+fn spoiled_tensors() -> Vec<(&'static str, Value, &'static str)> {
+    vec![
         (
             "/normalization/targets/std/1",
             serde_json::json!(0.0),
@@ -157,8 +149,20 @@ fn model_folders_that_cannot_be_right_are_refused_at_load() {
             serde_json::json!(11),
             "condition_layout makes 548 values, condition_dim says 547",
         ),
-    ];
-    for (k, (pointer, value, expected)) in spoils.into_iter().enumerate() {
+    ]
+}
+
+/// A model folder whose statistics, size or ensemble list cannot be right is refused at load,
+/// naming the file and the value, before any prediction: `tensors.json` with a zero, negative
+/// or huge deviation, a huge mean, an empty material range or an unknown format; a
+/// `config.toml` of a network far larger than its weights (refused before it is built); an
+/// ensemble naming one run twice. `evaluate` with nothing to score says so.
+#[test]
+fn model_folders_that_cannot_be_right_are_refused_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.mcap");
+    let predict = |model: &Path| predict_fails(model, &out);
+    for (k, (pointer, value, expected)) in spoiled_tensors().into_iter().enumerate() {
         let name = format!("spoiled{k}");
         let run = shipped_copy(&dir.path().join(&name));
         let path = run.join("tensors.json");

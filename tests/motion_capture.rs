@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use common::{json, ok};
 
@@ -48,9 +48,15 @@ fn cmu_01_01_shows_poses_an_upright_body_and_exports_as_amass() {
         assert!(dropped.contains(&joint), "{joint}: {dropped:?}");
     }
 
-    // An upright person at every tenth frame, the last included.
+    an_upright_body_at_every_tenth_frame(clip, dir.path());
+    a_stretch_exported_as_amass_reads_back_the_same(clip, dir.path());
+}
+
+/// An upright person at every tenth frame of the clip, the last included; a frame past the end
+/// is refused.
+fn an_upright_body_at_every_tenth_frame(clip: &str, dir: &Path) {
     for frame in (0..688).step_by(10).chain([687]) {
-        let out = dir.path().join(format!("body_{frame}.json"));
+        let out = dir.join(format!("body_{frame}.json"));
         let k = frame.to_string();
         ok(&[
             "body",
@@ -80,10 +86,12 @@ fn cmu_01_01_shows_poses_an_upright_body_and_exports_as_amass() {
         "body", "--motion", clip, "--frame", "688", "--json", "x.json",
     ]);
     assert!(past.contains("past the end"), "{past}");
+}
 
-    // A stretch exported as AMASS-style .npz reads back as the same motion.
+/// A stretch exported as AMASS-style .npz reads back as the same motion.
+fn a_stretch_exported_as_amass_reads_back_the_same(clip: &str, dir: &Path) {
     let stretch = format!("{clip}:start=5,duration=2");
-    let npz = dir.path().join("stretch.npz");
+    let npz = dir.join("stretch.npz");
     ok(&[
         "motions",
         "export",
@@ -91,7 +99,7 @@ fn cmu_01_01_shows_poses_an_upright_body_and_exports_as_amass() {
         "--out",
         npz.to_str().unwrap(),
     ]);
-    let (a, b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    let (a, b) = (dir.join("a.json"), dir.join("b.json"));
     ok(&["motions", "show", &stretch, "--json", a.to_str().unwrap()]);
     ok(&[
         "motions",

@@ -259,7 +259,7 @@ fn dataset_spread_is_zero_unperturbed_and_small_with_stiffer_cloth() {
 }
 
 #[test]
-fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
+fn evaluate_ranks_the_baselines_per_family_and_motion() {
     let f = fixture();
     let data = f.dir.join("data");
     let dir = tempfile::tempdir().unwrap();
@@ -345,8 +345,11 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
         );
     }
     assert_eq!(j["sequences"].as_array().unwrap().len(), 1);
+}
 
-    // The ground truth, scored as a prediction, scores zero.
+#[test]
+fn the_ground_truth_scored_as_a_prediction_scores_zero() {
+    let f = fixture();
     let seq = surrogate::data::Sequence::read(&f.truth).unwrap();
     let body = motions::BodyModel::default_body();
     let truth = surrogate::evaluate::Truth::new(&seq, &body, 0).unwrap();
@@ -361,8 +364,14 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
         assert!(v.abs() < 1e-9, "{name} = {v} for the ground truth");
     }
     assert!(sc.E_s.abs() < 1e-9 && sc.E_d.abs() < 1e-9, "{sc:?}");
+}
 
-    // With the model: its rows, the report, and the cache on a rerun.
+#[test]
+fn evaluate_scores_the_model_writes_its_report_and_reuses_its_cache() {
+    let f = fixture();
+    let data = f.dir.join("data");
+    let dir = tempfile::tempdir().unwrap();
+    let scores = dir.path().join("model.json");
     let report = dir.path().join("report");
     let args = [
         "evaluate",
@@ -412,7 +421,14 @@ fn evaluate_ranks_the_baselines_scores_the_truth_zero_and_writes_its_report() {
     let again = ok(&args);
     assert!(again.contains("(1 reused"), "{again}");
     assert_eq!(json(&scores)["splits"], j["splits"]);
+}
 
+#[test]
+fn evaluate_refuses_unknown_baselines_splits_and_damaged_manifests() {
+    let f = fixture();
+    let data = f.dir.join("data");
+    let dir = tempfile::tempdir().unwrap();
+    let scores = dir.path().join("refused.json");
     let e = fails(&[
         "evaluate",
         "--model",

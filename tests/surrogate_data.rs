@@ -130,6 +130,28 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     assert!(names.contains(&"templates.safetensors"), "{names:?}");
     assert!(names.contains(&"train-0000.safetensors"), "{names:?}");
     assert!(names.contains(&"test_motion-0000.safetensors"), "{names:?}");
+    let dim = the_manifest_describes_the_tensors(&a);
+    if common::python_has(
+        "surrogate_data::dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage",
+        "safetensors, numpy",
+    ) {
+        let j = common::python_tool("read_tensors.py", &a);
+        assert_eq!(j["train"]["targets"], serde_json::json!([8, 3, 64, 64]));
+        assert_eq!(j["train"]["conditions"], serde_json::json!([8, dim]));
+        assert_eq!(j["train"]["bodies"], serde_json::json!([8, 6, 64, 64]));
+        assert_eq!(
+            j["templates"]["position_maps"],
+            serde_json::json!([1, 3, 64, 64])
+        );
+    }
+
+    nearest_body_inputs_extend_the_body_channels(dir.path(), &data, &a);
+    a_damaged_recording_is_named_and_nothing_written(dir.path(), &data);
+}
+
+/// The manifest's resolution, target, window, condition blocks, splits and normalization;
+/// returns the condition dimension.
+fn the_manifest_describes_the_tensors(a: &Path) -> u64 {
     let m: Value = json(&a.join("manifest.json"));
     assert_eq!(m["resolution"], 64);
     assert_eq!(m["target"], "lbs_residual");
@@ -157,23 +179,13 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
         3
     );
 
-    if common::python_has(
-        "surrogate_data::dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage",
-        "safetensors, numpy",
-    ) {
-        let j = common::python_tool("read_tensors.py", &a);
-        assert_eq!(j["train"]["targets"], serde_json::json!([8, 3, 64, 64]));
-        assert_eq!(j["train"]["conditions"], serde_json::json!([8, dim]));
-        assert_eq!(j["train"]["bodies"], serde_json::json!([8, 6, 64, 64]));
-        assert_eq!(
-            j["templates"]["position_maps"],
-            serde_json::json!([1, 3, 64, 64])
-        );
-    }
+    dim
+}
 
-    // With the nearest-body inputs: 12 body channels, the first 6 the same bytes as before;
-    // the displacement target has no body inputs to extend.
-    let n = dir.path().join("tn");
+/// With the nearest-body inputs: 12 body channels, the first 6 the same bytes as the tensors
+/// in `a`; the displacement target has no body inputs to extend.
+fn nearest_body_inputs_extend_the_body_channels(dir: &Path, data: &Path, a: &Path) {
+    let n = dir.join("tn");
     let nearest = |target: &str| {
         run_with(
             &[
@@ -201,7 +213,7 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     assert!(!n.exists(), "a refused run wrote {}", n.display());
     assert!(nearest("lbs_residual").status.success());
     let shard = |dir: &Path| std::fs::read(dir.join("train-0000.safetensors")).unwrap();
-    let (plain, near) = (shard(&a), shard(&n));
+    let (plain, near) = (shard(a), shard(&n));
     let bodies = |bytes: &[u8]| -> (Vec<usize>, Vec<u8>) {
         let file = safetensors::SafeTensors::deserialize(bytes).unwrap();
         let t = file.tensor("bodies").unwrap();
@@ -216,8 +228,10 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
             "frame {f}: the first 6 body channels changed"
         );
     }
+}
 
-    // A damaged recording: the error names it, exit 1, nothing written.
+/// A damaged recording: the error names it, exit 1, nothing written.
+fn a_damaged_recording_is_named_and_nothing_written(dir: &Path, data: &Path) {
     let record: Value = serde_json::from_str(
         std::fs::read_to_string(data.join("manifest.jsonl"))
             .unwrap()
@@ -231,7 +245,7 @@ fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     let middle = bytes.len() / 2;
     bytes[middle] ^= 0x5a;
     std::fs::write(&file, bytes).unwrap();
-    let c = dir.path().join("tc");
+    let c = dir.join("tc");
     let out = run_with(
         &[
             "dataset",

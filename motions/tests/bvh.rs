@@ -369,23 +369,13 @@ fn a_joint_map_file_drives_any_skeleton_and_bad_maps_are_refused() {
     assert!(err.contains("is not below"), "{err}");
 }
 
-#[test]
-fn damaged_files_are_refused_naming_the_line() {
-    let dir = tempfile::tempdir().unwrap();
-    let good = "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n  JOINT Leg\n  {\n    OFFSET 0 -1 0\n    CHANNELS 3 Zrotation Yrotation Xrotation\n    End Site\n    {\n      OFFSET 0 -1 0\n    }\n  }\n}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n0 1 0 0 0 0 0 0 0\n0 1 0 0 0 0 10 0 0\n";
-    let bvh = Bvh::parse(good, Path::new("good.bvh")).unwrap();
-    assert_eq!(
-        (bvh.frames(), bvh.joints.len(), bvh.values_per_frame),
-        (2, 2, 9)
-    );
-    // A frame past the announced count (an exporter's off-by-one) is read and kept out.
-    let one = Bvh::parse(
-        &good.replace("Frames: 2", "Frames: 1"),
-        Path::new("one.bvh"),
-    )
-    .unwrap();
-    assert_eq!(one.frames(), 1);
-    for (what, text, line, expected) in [
+/// A small well-formed file: a root and one joint, two frames.
+const GOOD: &str = "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n  JOINT Leg\n  {\n    OFFSET 0 -1 0\n    CHANNELS 3 Zrotation Yrotation Xrotation\n    End Site\n    {\n      OFFSET 0 -1 0\n    }\n  }\n}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n0 1 0 0 0 0 0 0 0\n0 1 0 0 0 0 10 0 0\n";
+
+/// Damaged versions of [`GOOD`]: (what, the text, the line named, words of the error).
+fn damaged_versions() -> Vec<(&'static str, String, usize, &'static str)> {
+    let good = GOOD;
+    vec![
         (
             "no header",
             good.replace("HIERARCHY", "HIERARCHIE"),
@@ -480,7 +470,25 @@ fn damaged_files_are_refused_naming_the_line() {
             20,
             "after 2 of the 3 frames",
         ),
-    ] {
+    ]
+}
+
+#[test]
+fn damaged_files_are_refused_naming_the_line() {
+    let good = GOOD;
+    let bvh = Bvh::parse(good, Path::new("good.bvh")).unwrap();
+    assert_eq!(
+        (bvh.frames(), bvh.joints.len(), bvh.values_per_frame),
+        (2, 2, 9)
+    );
+    // A frame past the announced count (an exporter's off-by-one) is read and kept out.
+    let one = Bvh::parse(
+        &good.replace("Frames: 2", "Frames: 1"),
+        Path::new("one.bvh"),
+    )
+    .unwrap();
+    assert_eq!(one.frames(), 1);
+    for (what, text, line, expected) in damaged_versions() {
         let err = Bvh::parse(&text, Path::new("damaged.bvh"))
             .unwrap_err()
             .to_string();
@@ -490,7 +498,12 @@ fn damaged_files_are_refused_naming_the_line() {
             "{what}: {err}"
         );
     }
-    // Through the motion argument: a missing file and a damaged one name the file.
+}
+
+#[test]
+fn damaged_and_missing_motion_files_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = GOOD;
     let model = BodyModel::default_body();
     let shaped = model.shape(&[]).unwrap();
     let damaged = write(dir.path(), "cut.bvh", &good[..200]);

@@ -17,6 +17,42 @@ pub struct Series<'a> {
     pub colour: [u8; 3],
 }
 
+/// The chart's axes: x from the data, y in whole decades 10^d0 ..= 10^d1 so the grid lines
+/// fall on 10^k.
+struct Range {
+    x0: f64,
+    x1: f64,
+    d0: i32,
+    d1: i32,
+}
+
+impl Range {
+    /// The range of the drawable points of `series` (positive, finite), or a default.
+    fn of(series: &[Series]) -> Self {
+        let all: Vec<(f64, f64)> = series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|&&(x, y)| x.is_finite() && y.is_finite() && y > 0.0)
+            .copied()
+            .collect();
+        let (mut x0, mut x1, mut y0, mut y1) = (0.0f64, 1.0f64, 1e-3f64, 1.0f64);
+        if !all.is_empty() {
+            x0 = all.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+            x1 = all.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+            y0 = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+            y1 = all.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        }
+        if x1 <= x0 {
+            x1 = x0 + 1.0;
+        }
+        let (d0, mut d1) = (y0.log10().floor() as i32, y1.log10().ceil() as i32);
+        if d1 <= d0 {
+            d1 = d0 + 1;
+        }
+        Self { x0, x1, d0, d1 }
+    }
+}
+
 /// A white `width` x `height` chart of `series` with a log-scale y axis, a title, tick labels
 /// and a legend. Fails only on a size plotters cannot draw.
 pub fn log_line_chart(
@@ -27,27 +63,9 @@ pub fn log_line_chart(
     height: u32,
 ) -> Result<RgbImage, Error> {
     let finite = |&&(x, y): &&(f64, f64)| x.is_finite() && y.is_finite() && y > 0.0;
-    let all: Vec<(f64, f64)> = series
-        .iter()
-        .flat_map(|s| s.points.iter().filter(finite).copied())
-        .collect();
-    let (mut x0, mut x1, mut y0, mut y1) = (0.0f64, 1.0f64, 1e-3f64, 1.0f64);
-    if !all.is_empty() {
-        x0 = all.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-        x1 = all.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-        y0 = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        y1 = all.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
-    }
-    if x1 <= x0 {
-        x1 = x0 + 1.0;
-    }
-    // Whole decades, so the grid lines fall on 10^k.
-    let (d0, mut d1) = (y0.log10().floor() as i32, y1.log10().ceil() as i32);
-    if d1 <= d0 {
-        d1 = d0 + 1;
-    }
+    let range = Range::of(series);
+    let (x0, x1, d0, d1) = (range.x0, range.x1, range.d0, range.d1);
     let (y0, y1) = (10f64.powi(d0), 10f64.powi(d1));
-
     let mut buffer = vec![255u8; width as usize * height as usize * 3];
     let mut ticks = Vec::new();
     {

@@ -21,6 +21,7 @@
 //! self-intersections (<= 300 crossing triangle pairs); the report also carries the largest
 //! edge stretch and the timings.
 
+use std::collections::VecDeque;
 use std::time::Instant;
 
 use garments::{Garment, SewnMesh};
@@ -360,6 +361,8 @@ pub fn settle_on_body(
     sew_placed(model, &unsewn, options, Placement::OnTheBody { start })
 }
 
+/// Stages: the first solver, the seams closed, crossings untangled, settled with cloth-cloth
+/// contact, the seams merged, the gates.
 fn sew_placed(
     model: &BodyModel,
     sewn: &SewnMesh,
@@ -385,25 +388,7 @@ fn sew_placed(
     if let Placement::OnTheBody { start } = placement {
         state.positions = start.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
     }
-    let gap = |state: &ClothState| {
-        let p: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
-        sewn.max_seam_gap(&p)
-    };
-    // Close the seams: no gravity, strong damping, the gap cap lowered linearly to 0.
-    let initial_gap = gap(&state);
-    solver.set_gravity_and_damping(0.0, 5.0);
-    let mut frame = 0;
-    // Nothing to close without seams.
-    while frame < options.max_close_frames && !sewn.stitch_pairs.is_empty() {
-        let ramp = (frame + 1) as f64 / options.close_frames.max(1) as f64;
-        solver.set_seam_length_cap(initial_gap * (1.0 - ramp.min(1.0)));
-        solver.advance_frame(&mut state, &mut obstacles, frame as f64 / FPS, frame)?;
-        frame += 1;
-        if frame >= options.close_frames && gap(&state) < MAX_SEAM_GAP_M / 2.0 {
-            break;
-        }
-    }
-    let close_frames = frame;
+    let close_frames = close_seams(&mut solver, &mut state, &mut obstacles, sewn, options)?;
     // Open the creases closing left crossed, then settle with cloth-cloth contact so the
     // layers stay apart (with contact from the start, panels that start apart cannot close).
     let untangled = untangle_seamed(&mut state, sewn);
@@ -417,10 +402,78 @@ fn sew_placed(
     )?;
     solver.set_seam_length_cap(0.0);
     solver.set_gravity_and_damping(SolverParams::default().gravity, options.settle_damping);
-    // Moving = net displacement over the last MOVING_WINDOW frames faster than MOVING_SPEED
-    // on average: drift, not the contact solver's frame-to-frame noise.
-    let mut history: std::collections::VecDeque<Vec<Vec3>> = std::collections::VecDeque::new();
-    let moving = |history: &std::collections::VecDeque<Vec<Vec3>>, state: &ClothState| {
+    let (settle_frames, moving_fraction) = settle(
+        &mut solver,
+        &mut state,
+        &mut obstacles,
+        options,
+        close_frames,
+    )?;
+    let max_seam_gap_m = sewn.max_seam_gap(&plain(&state));
+    let (max_edge_stretch, _) = edge_stretch(&mesh, &state.positions);
+    let template = sewn.merged(&plain(&state)).map_err(|e| Error::Garment {
+        garment: sewn.garment.name.clone(),
+        problem: format!("merging seams: {e}"),
+    })?;
+    let body_mesh = obstacles.body.as_mut().ok_or_else(|| Error::Obstacle {
+        obstacle: "body".into(),
+        problem: "missing from the sewing scene".into(),
+    })?;
+    let report = SewingReport {
+        max_edge_stretch,
+        close_frames,
+        crossings_closed: untangled.before,
+        crossings_untangled: untangled.after,
+        settle_frames,
+        drape_s: started.elapsed().as_secs_f64(),
+        ..gates(body_mesh, &template, moving_fraction, max_seam_gap_m)
+    };
+    Ok((template, report))
+}
+
+/// The cloth's positions as plain arrays.
+fn plain(state: &ClothState) -> Vec<[f64; 3]> {
+    state.positions.iter().map(|p| [p.x, p.y, p.z]).collect()
+}
+
+/// Closes the seams: no gravity, strong damping, the gap cap lowered linearly to 0. Returns the
+/// frames it took (none without seams).
+fn close_seams(
+    solver: &mut Solver,
+    state: &mut ClothState,
+    obstacles: &mut Obstacles,
+    sewn: &SewnMesh,
+    options: &SewingOptions,
+) -> Result<usize> {
+    let initial_gap = sewn.max_seam_gap(&plain(state));
+    solver.set_gravity_and_damping(0.0, 5.0);
+    let mut frame = 0;
+    while frame < options.max_close_frames && !sewn.stitch_pairs.is_empty() {
+        let ramp = (frame + 1) as f64 / options.close_frames.max(1) as f64;
+        solver.set_seam_length_cap(initial_gap * (1.0 - ramp.min(1.0)));
+        solver.advance_frame(state, obstacles, frame as f64 / FPS, frame)?;
+        frame += 1;
+        if frame >= options.close_frames && sewn.max_seam_gap(&plain(state)) < MAX_SEAM_GAP_M / 2.0
+        {
+            break;
+        }
+    }
+    Ok(frame)
+}
+
+/// Settles from frame `first` until the cloth stops moving (at least `min_settle_frames`, at
+/// most `max_settle_frames`). Moving = net displacement over the last MOVING_WINDOW frames
+/// faster than MOVING_SPEED on average: drift, not the contact solver's frame-to-frame noise.
+/// Returns the frames settled and the fraction of vertices still moving.
+fn settle(
+    solver: &mut Solver,
+    state: &mut ClothState,
+    obstacles: &mut Obstacles,
+    options: &SewingOptions,
+    first: usize,
+) -> Result<(usize, f64)> {
+    let mut history: VecDeque<Vec<Vec3>> = VecDeque::new();
+    let moving = |history: &VecDeque<Vec<Vec3>>, state: &ClothState| {
         let Some(old) = history.front().filter(|_| history.len() == MOVING_WINDOW) else {
             return 1.0;
         };
@@ -433,33 +486,32 @@ fn sew_placed(
             .count() as f64
             / state.positions.len() as f64
     };
-    let mut settle_frames = 0;
+    let (mut frame, mut settle_frames) = (first, 0);
     while settle_frames < options.max_settle_frames {
         if history.len() == MOVING_WINDOW {
             history.pop_front();
         }
         history.push_back(state.positions.clone());
-        solver.advance_frame(&mut state, &mut obstacles, frame as f64 / FPS, frame)?;
+        solver.advance_frame(state, obstacles, frame as f64 / FPS, frame)?;
         frame += 1;
         settle_frames += 1;
         if settle_frames >= options.min_settle_frames
-            && moving(&history, &state) <= MAX_MOVING_FRACTION
+            && moving(&history, state) <= MAX_MOVING_FRACTION
         {
             break;
         }
     }
-    let moving_fraction = moving(&history, &state);
-    let max_seam_gap_m = gap(&state);
-    let (max_edge_stretch, _) = edge_stretch(&mesh, &state.positions);
-    let draped: Vec<[f64; 3]> = state.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let template = sewn.merged(&draped).map_err(|e| Error::Garment {
-        garment: sewn.garment.name.clone(),
-        problem: format!("merging seams: {e}"),
-    })?;
-    let body_mesh = obstacles.body.as_mut().ok_or_else(|| Error::Obstacle {
-        obstacle: "body".into(),
-        problem: "missing from the sewing scene".into(),
-    })?;
+    Ok((settle_frames, moving(&history, state)))
+}
+
+/// The drape's gates on the merged `template`: still moving, vertices inside the body, the
+/// seam gap, crossing triangle pairs. The caller fills in what the earlier stages counted.
+fn gates(
+    body_mesh: &mut AnimatedMesh,
+    template: &Garment,
+    moving_fraction: f64,
+    max_seam_gap_m: f64,
+) -> SewingReport {
     let merged: Vec<Vec3> = template
         .positions
         .iter()
@@ -495,7 +547,7 @@ fn sew_placed(
              {MAX_SELF_INTERSECTIONS})"
         ));
     }
-    let report = SewingReport {
+    SewingReport {
         gates_passed: failed.is_empty(),
         vertices: template.positions.len(),
         triangles: template.triangles.len(),
@@ -503,14 +555,13 @@ fn sew_placed(
         max_penetration_m,
         max_seam_gap_m,
         moving_fraction,
-        max_edge_stretch,
+        max_edge_stretch: 0.0,
         self_intersections,
-        close_frames,
-        crossings_closed: untangled.before,
-        crossings_untangled: untangled.after,
-        settle_frames,
-        drape_s: started.elapsed().as_secs_f64(),
+        close_frames: 0,
+        crossings_closed: 0,
+        crossings_untangled: 0,
+        settle_frames: 0,
+        drape_s: 0.0,
         failed,
-    };
-    Ok((template, report))
+    }
 }

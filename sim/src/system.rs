@@ -51,7 +51,9 @@ pub(crate) struct GlobalSystem {
 
 impl GlobalSystem {
     /// Assembles and factorizes P for step `h`. `symbolic` is reused when given (it must come
-    /// from the same mesh, constraints and pins).
+    /// from the same mesh, constraints and pins). Stages: the full matrix in CSR, its reduced
+    /// lower triangle, the symbolic analysis (or the one given), the numeric factor, the pin
+    /// couplings.
     pub fn new(
         masses: &[f64],
         constraints: &Constraints,
@@ -61,98 +63,13 @@ impl GlobalSystem {
         symbolic: Option<Symbolic>,
     ) -> Result<Self> {
         let n = masses.len();
-        // Full symmetric entries, merged into CSR.
-        let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(n + 9 * constraints.len());
-        for (i, &m) in masses.iter().enumerate() {
-            entries.push((i as u32, i as u32, m));
-        }
-        let h2 = h * h;
-        let mut stencil = Vec::new();
-        for t in 0..constraints.len() {
-            if lag_bending && constraints.is_bending(t) {
-                continue;
-            }
-            let w = h2 * constraints.weight(t);
-            stencil.clear();
-            stencil.extend(constraints.stencil(t));
-            for &(a, ca) in &stencil {
-                for &(b, cb) in &stencil {
-                    entries.push((a as u32, b as u32, w * ca * cb));
-                }
-            }
-        }
-        entries.sort_unstable_by_key(|&(r, c, _)| (r, c));
-        let mut row_ptr = vec![0usize; n + 1];
-        let mut col: Vec<u32> = Vec::with_capacity(entries.len());
-        let mut val: Vec<f64> = Vec::with_capacity(entries.len());
-        let mut last = None;
-        for &(r, c, v) in &entries {
-            if last == Some((r, c)) {
-                *val.last_mut().expect("merged entry") += v;
-            } else {
-                col.push(c);
-                val.push(v);
-                row_ptr[r as usize + 1] += 1;
-                last = Some((r, c));
-            }
-        }
-        for i in 0..n {
-            row_ptr[i + 1] += row_ptr[i];
-        }
-
-        // Lower triangle of the reduced matrix (pins replaced by the identity).
-        let mut lower = Vec::with_capacity(val.len() / 2 + n);
-        for r in 0..n {
-            for k in row_ptr[r]..row_ptr[r + 1] {
-                let c = col[k] as usize;
-                if c > r {
-                    continue;
-                }
-                if pinned[r] || pinned[c] {
-                    if r == c {
-                        lower.push(Triplet::new(r, c, 1.0));
-                    }
-                    continue;
-                }
-                lower.push(Triplet::new(r, c, val[k]));
-            }
-        }
-        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower)
-            .map_err(|e| factorization("assembly", e))?;
+        let (row_ptr, col, val) = assemble_csr(masses, constraints, h, lag_bending);
+        let matrix = reduced_lower(&row_ptr, &col, &val, pinned)?;
         let symbolic = match symbolic {
             Some(s) if s.nrows() == n => s,
-            _ => Arc::new(
-                // Simplicial: the solves are ours (`factor.rs`); measured, faer's supernodal
-                // solve of this matrix was 1.7x slower.
-                factorize_symbolic_cholesky(
-                    matrix.symbolic(),
-                    Side::Lower,
-                    Default::default(),
-                    CholeskySymbolicParams {
-                        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
-                        ..Default::default()
-                    },
-                )
-                .map_err(|e| factorization("symbolic", e))?,
-            ),
+            _ => analyse(&matrix)?,
         };
-        let mut factor = vec![0.0; symbolic.len_val()];
-        let mut stack = MemBuffer::new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-        );
-        symbolic
-            .factorize_numeric_llt(
-                &mut factor,
-                matrix.as_ref(),
-                Side::Lower,
-                Default::default(),
-                Par::Seq,
-                MemStack::new(&mut stack),
-                Default::default(),
-            )
-            .map_err(|e| factorization("numeric", e))?;
-        let factor = SplitFactor::new(&symbolic, &factor)
-            .ok_or_else(|| factorization("symbolic", "the factor is not simplicial"))?;
+        let factor = factorize(&symbolic, &matrix)?;
         let mut pin_couplings = Vec::new();
         for (position, &i) in factor.order().iter().enumerate() {
             let i = i as usize;
@@ -231,6 +148,119 @@ impl GlobalSystem {
             out[i as usize] = *x;
         }
     }
+}
+
+/// P's full symmetric entries (masses, and h^2 w_t a_t a_t^T of every term but lagged
+/// bending) merged into CSR: (row pointers, columns, values).
+fn assemble_csr(
+    masses: &[f64],
+    constraints: &Constraints,
+    h: f64,
+    lag_bending: bool,
+) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+    let n = masses.len();
+    let mut entries: Vec<(u32, u32, f64)> = Vec::with_capacity(n + 9 * constraints.len());
+    for (i, &m) in masses.iter().enumerate() {
+        entries.push((i as u32, i as u32, m));
+    }
+    let h2 = h * h;
+    let mut stencil = Vec::new();
+    for t in 0..constraints.len() {
+        if lag_bending && constraints.is_bending(t) {
+            continue;
+        }
+        let w = h2 * constraints.weight(t);
+        stencil.clear();
+        stencil.extend(constraints.stencil(t));
+        for &(a, ca) in &stencil {
+            for &(b, cb) in &stencil {
+                entries.push((a as u32, b as u32, w * ca * cb));
+            }
+        }
+    }
+    entries.sort_unstable_by_key(|&(r, c, _)| (r, c));
+    let mut row_ptr = vec![0usize; n + 1];
+    let mut col: Vec<u32> = Vec::with_capacity(entries.len());
+    let mut val: Vec<f64> = Vec::with_capacity(entries.len());
+    let mut last = None;
+    for &(r, c, v) in &entries {
+        if last == Some((r, c)) {
+            *val.last_mut().expect("merged entry") += v;
+        } else {
+            col.push(c);
+            val.push(v);
+            row_ptr[r as usize + 1] += 1;
+            last = Some((r, c));
+        }
+    }
+    for i in 0..n {
+        row_ptr[i + 1] += row_ptr[i];
+    }
+    (row_ptr, col, val)
+}
+
+/// The lower triangle of the reduced matrix: pinned rows and columns replaced by the identity.
+fn reduced_lower(
+    row_ptr: &[usize],
+    col: &[u32],
+    val: &[f64],
+    pinned: &[bool],
+) -> Result<SparseColMat<usize, f64>> {
+    let n = pinned.len();
+    let mut lower = Vec::with_capacity(val.len() / 2 + n);
+    for r in 0..n {
+        for k in row_ptr[r]..row_ptr[r + 1] {
+            let c = col[k] as usize;
+            if c > r {
+                continue;
+            }
+            if pinned[r] || pinned[c] {
+                if r == c {
+                    lower.push(Triplet::new(r, c, 1.0));
+                }
+                continue;
+            }
+            lower.push(Triplet::new(r, c, val[k]));
+        }
+    }
+    SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower)
+        .map_err(|e| factorization("assembly", e))
+}
+
+/// The symbolic analysis of `matrix`'s pattern. Simplicial: the solves are ours
+/// (`factor.rs`); measured, faer's supernodal solve of this matrix was 1.7x slower.
+fn analyse(matrix: &SparseColMat<usize, f64>) -> Result<Symbolic> {
+    let symbolic = factorize_symbolic_cholesky(
+        matrix.symbolic(),
+        Side::Lower,
+        Default::default(),
+        CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| factorization("symbolic", e))?;
+    Ok(Arc::new(symbolic))
+}
+
+/// The numeric LL^T factor of `matrix` on `symbolic`'s pattern, split for our solves.
+fn factorize(symbolic: &Symbolic, matrix: &SparseColMat<usize, f64>) -> Result<SplitFactor> {
+    let mut factor = vec![0.0; symbolic.len_val()];
+    let mut stack =
+        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
+    symbolic
+        .factorize_numeric_llt(
+            &mut factor,
+            matrix.as_ref(),
+            Side::Lower,
+            Default::default(),
+            Par::Seq,
+            MemStack::new(&mut stack),
+            Default::default(),
+        )
+        .map_err(|e| factorization("numeric", e))?;
+    SplitFactor::new(symbolic, &factor)
+        .ok_or_else(|| factorization("symbolic", "the factor is not simplicial"))
 }
 
 fn factorization(stage: &'static str, e: impl std::fmt::Debug) -> Error {

@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
 use surrogate::evaluate::tables::{
-    aggregate, aggregate_by, family_of, grouped_text_table, text_table,
+    SequenceResult, SplitRows, aggregate, aggregate_by, family_of, grouped_text_table, text_table,
 };
 use surrogate::evaluate::{Evaluation, describe_model, document, fingerprint, select};
 use surrogate::predict::{Predictor, Settings};
@@ -27,13 +27,7 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
     if args.json.is_none() && args.report.is_none() {
         bail!("nothing to write: give --json F and/or --report DIR");
     }
-    // The flags' own mistakes, before the dataset is read (and blamed).
-    if args.max_sequences == Some(0) {
-        bail!("--max-sequences 0: score at least 1 sequence (or leave the flag out for all)");
-    }
-    if args.splits.iter().any(|s| s.trim().is_empty()) {
-        bail!("--splits holds an empty name: give split names, comma-separated");
-    }
+    check_flags(args)?;
     let trained = match args.model.as_str() {
         "none" => None,
         name => Some(TrainedModel::load_named(name, &Device::flex())?),
@@ -112,7 +106,28 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         report::write(dir, &output, &results, &pictures)
             .with_context(|| format!("writing the report in {}", dir.display()))?;
     }
-    let splits = &rows.0;
+    print_tables(&results, &rows.0, started, reused)
+}
+
+/// The flags' own mistakes, before the dataset is read (and blamed).
+fn check_flags(args: &EvaluateArgs) -> Result<()> {
+    if args.max_sequences == Some(0) {
+        bail!("--max-sequences 0: score at least 1 sequence (or leave the flag out for all)");
+    }
+    if args.splits.iter().any(|s| s.trim().is_empty()) {
+        bail!("--splits holds an empty name: give split names, comma-separated");
+    }
+    Ok(())
+}
+
+/// The split table, then per garment family and per motion within each split where a split
+/// has several.
+fn print_tables(
+    results: &[SequenceResult],
+    splits: &SplitRows,
+    started: Instant,
+    reused: usize,
+) -> Result<()> {
     say!(
         "evaluate: {} sequences of {} splits in {:.1} s ({} reused from the cache)",
         results.len(),
@@ -121,13 +136,12 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         reused
     );
     say_part!("{}", text_table(splits));
-    // Per garment family and per motion within each split, where a split has several.
     for (label, groups) in [
         (
             "family",
-            aggregate_by(&results, |r| family_of(&r.garment).to_string()),
+            aggregate_by(results, |r| family_of(&r.garment).to_string()),
         ),
-        ("motion", aggregate_by(&results, |r| r.motion.clone())),
+        ("motion", aggregate_by(results, |r| r.motion.clone())),
     ] {
         if groups.values().any(|g| g.len() > 1) {
             say_part!("\n{}", grouped_text_table(label, &groups));

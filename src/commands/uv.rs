@@ -23,11 +23,7 @@ const PICTURE_PIXELS: u32 = 384;
 const TARGET_PICTURES: usize = 4;
 
 pub fn run(args: &UvArgs) -> Result<()> {
-    let kind = TargetKind::parse(&args.target).context("unknown --target")?;
-    let removal = match args.root.as_str() {
-        "full" => RootRemoval::Full,
-        _ => RootRemoval::Heading,
-    };
+    target_and_root(args)?;
     let model = sim::sources::body_model(args.model.body_model.as_deref())?;
     let is_recording = args.source.ends_with(".mcap");
     let (template, sequence) = if is_recording {
@@ -61,57 +57,24 @@ pub fn run(args: &UvArgs) -> Result<()> {
     });
     tiles.push((mask, "mask (grey: read back)".to_string()));
     let texel_cm = GeometryImage::texel_cm(&template, r);
-    let mut floor_line = String::new();
     let mut summary = json!({
         "source": args.source, "resolution": r, "coverage": atlas.coverage(),
         "texel_cm": texel_cm, "vertices": template.positions.len(),
         "uv_corners": template.uvs.len(), "charts": atlas.charts(),
         "root": args.root,
     });
-    if let Some(sequence) = &sequence {
-        let mut targets = Targets::new(
+    let floor_line = match &sequence {
+        Some(sequence) => recording_floor(
+            args,
             &model,
-            &template.positions,
-            &template.triangles,
-            kind,
-            removal,
-        )?;
-        let floor = roundtrip_floor(&model, sequence, &image, &mut targets, args.every)?;
-        let first = sequence.first_motion_frame();
-        let frames: Vec<usize> = (0..TARGET_PICTURES)
-            .map(|i| first + (sequence.len() - 1 - first) * i / (TARGET_PICTURES - 1))
-            .collect();
-        let scale = ColourScale {
-            min: 0.0,
-            max: (floor.target_mean_cm * 3.0).max(1.0) as f32,
-        };
-        for &k in &frames {
-            let target = targets.encode(&model, sequence.body(k), &sequence.garment[k])?;
-            let map = image.encode(&target)?;
-            tiles.push((
-                magnitude_picture(&map, &inside, r, PICTURE_PIXELS / r as u32, scale),
-                format!("{} frame {k}", kind.name()),
-            ));
-        }
-        summary["target"] = kind.name().into();
-        summary["frames_scored"] = floor.frames_scored.into();
-        summary["roundtrip_E_v_cm"] = floor.mean_cm.into();
-        summary["roundtrip_p95_cm"] = floor.p95_cm.into();
-        summary["roundtrip_max_cm"] = floor.max_cm.into();
-        summary["worst_vertex"] = floor.worst_vertex.into();
-        summary["target_mean_cm"] = floor.target_mean_cm.into();
-        summary["target_frames"] = json!(frames);
-        floor_line = format!(
-            "; round trip ({}, {} frames): mean {:.3} cm, p95 {:.3} cm, max {:.2} cm (vertex {}); mean target {:.2} cm",
-            kind.name(),
-            floor.frames_scored,
-            floor.mean_cm,
-            floor.p95_cm,
-            floor.max_cm,
-            floor.worst_vertex,
-            floor.target_mean_cm,
-        );
-    }
+            sequence,
+            &image,
+            &template,
+            &mut tiles,
+            &mut summary,
+        )?,
+        None => String::new(),
+    };
     let names = ["position_map.png", "mask.png"];
     for (i, (tile, _)) in tiles.iter().enumerate() {
         let name = match names.get(i) {
@@ -138,4 +101,71 @@ pub fn run(args: &UvArgs) -> Result<()> {
         write_json(path, &summary)?;
     }
     Ok(())
+}
+
+/// For a recording: the target maps of TARGET_PICTURES frames added to `tiles`, the UV
+/// round-trip floor added to `summary`; returns the floor's line for the printout.
+fn recording_floor(
+    args: &UvArgs,
+    model: &motions::BodyModel,
+    sequence: &Sequence,
+    image: &GeometryImage,
+    template: &TemplateArrays,
+    tiles: &mut Vec<(render::RgbImage, String)>,
+    summary: &mut serde_json::Value,
+) -> Result<String> {
+    let (kind, removal) = target_and_root(args)?;
+    let (r, inside) = (args.resolution, image.atlas().inside().to_vec());
+    let mut targets = Targets::new(
+        model,
+        &template.positions,
+        &template.triangles,
+        kind,
+        removal,
+    )?;
+    let floor = roundtrip_floor(model, sequence, image, &mut targets, args.every)?;
+    let first = sequence.first_motion_frame();
+    let frames: Vec<usize> = (0..TARGET_PICTURES)
+        .map(|i| first + (sequence.len() - 1 - first) * i / (TARGET_PICTURES - 1))
+        .collect();
+    let scale = ColourScale {
+        min: 0.0,
+        max: (floor.target_mean_cm * 3.0).max(1.0) as f32,
+    };
+    for &k in &frames {
+        let target = targets.encode(model, sequence.body(k), &sequence.garment[k])?;
+        let map = image.encode(&target)?;
+        tiles.push((
+            magnitude_picture(&map, &inside, r, PICTURE_PIXELS / r as u32, scale),
+            format!("{} frame {k}", kind.name()),
+        ));
+    }
+    summary["target"] = kind.name().into();
+    summary["frames_scored"] = floor.frames_scored.into();
+    summary["roundtrip_E_v_cm"] = floor.mean_cm.into();
+    summary["roundtrip_p95_cm"] = floor.p95_cm.into();
+    summary["roundtrip_max_cm"] = floor.max_cm.into();
+    summary["worst_vertex"] = floor.worst_vertex.into();
+    summary["target_mean_cm"] = floor.target_mean_cm.into();
+    summary["target_frames"] = json!(frames);
+    Ok(format!(
+        "; round trip ({}, {} frames): mean {:.3} cm, p95 {:.3} cm, max {:.2} cm (vertex {}); mean target {:.2} cm",
+        kind.name(),
+        floor.frames_scored,
+        floor.mean_cm,
+        floor.p95_cm,
+        floor.max_cm,
+        floor.worst_vertex,
+        floor.target_mean_cm,
+    ))
+}
+
+/// The target kind and root removal `--target` and `--root` name.
+fn target_and_root(args: &UvArgs) -> Result<(TargetKind, RootRemoval)> {
+    let kind = TargetKind::parse(&args.target).context("unknown --target")?;
+    let removal = match args.root.as_str() {
+        "full" => RootRemoval::Full,
+        _ => RootRemoval::Heading,
+    };
+    Ok((kind, removal))
 }

@@ -1,6 +1,8 @@
 //! The DiT's speed on this CPU: training samples/s and forward ms at 64 x 64 for patch 1, 2 and
 //! 4 at batch 1, 16 and 64, on 1 and 2 threads, and the depthwise convolution as shifted
-//! multiply-adds versus burn's grouped `Conv2d`. Prints a markdown table
+//! multiply-adds versus burn's grouped `Conv2d` in training (the only place the choice applies:
+//! sampling always runs the hand-written kernel, `model/kernels.rs`, so a forward pass outside
+//! autodiff would time that one kernel twice). Prints a markdown table
 //! (`cargo bench -p surrogate --bench dit`; docs/BENCHMARKS.md records it).
 //!
 //! A training step is the trainer's: forward, weighted MSE, backward, global-norm clipping,
@@ -125,8 +127,8 @@ fn main() {
         }
     }
     println!();
-    println!("| depthwise | patch | batch | forward ms | train samples/s |");
-    println!("|---|---|---|---|---|");
+    println!("| depthwise (training only) | patch | batch | train samples/s |");
+    println!("|---|---|---|---|");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -141,9 +143,8 @@ fn main() {
                 patch,
                 ..base.clone()
             };
-            let forward = pool.install(|| forward_ms(&config, 16));
             let train = pool.install(|| train_samples_per_s(&config, 16));
-            println!("| {how:?} | {patch} | 16 | {forward:.1} | {train:.2} |");
+            println!("| {how:?} | {patch} | 16 | {train:.2} |");
         }
     }
 }

@@ -338,6 +338,17 @@ impl Design {
     }
 }
 
+/// An armhole from `a` to `b`, curving in towards the corner (inner x, lower y).
+fn armhole_scoop(a: [f64; 2], b: [f64; 2]) -> Value {
+    let corner = [a[0].abs().min(b[0].abs()) * a[0].signum(), a[1].min(b[1])];
+    let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    quadratic(
+        a,
+        b,
+        [(corner[0] + mid[0]) / 2.0, (corner[1] + mid[1]) / 2.0],
+    )
+}
+
 impl DesignParams {
     /// These measurements as a checked pattern named `name`.
     pub fn pattern(&self, name: &str) -> Result<Pattern> {
@@ -347,101 +358,11 @@ impl DesignParams {
     /// These measurements as GarmentCode specification JSON.
     pub fn spec(&self) -> SpecFile {
         let p = self;
-        let ya = ARMPIT_Y - p.armhole_drop - p.hem_height;
-        let ys = SHOULDER_Y - p.hem_height;
-        let yn = NECK_Y - p.hem_height;
-        let (wh, wc, xs, xn) = (
-            p.hem_half_width,
-            p.chest_half_width,
-            p.shoulder_half_width,
-            p.neck_half_width,
-        );
         let mut panels = serde_json::Map::new();
         let mut stitches = Vec::new();
-        let sleeves = p.sleeve_length > 0.0;
         for (front, depth) in [(true, p.front_neck_depth), (false, p.back_neck_depth)] {
-            // Corners counter-clockwise for the front: hem, +x side, armhole, shoulder, neck,
-            // centre of the neckline, then the -x side.
-            let v = [
-                [-wh, 0.0],
-                [wh, 0.0],
-                [wc, ya],
-                [xs, ys],
-                [xn, yn],
-                [0.0, yn - depth],
-                [-xn, yn],
-                [-xs, ys],
-                [-wc, ya],
-            ];
-            let scoop = |a: [f64; 2], b: [f64; 2]| {
-                // Armhole curving in towards the corner (inner x, lower y).
-                let corner = [a[0].abs().min(b[0].abs()) * a[0].signum(), a[1].min(b[1])];
-                let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
-                quadratic(
-                    a,
-                    b,
-                    [(corner[0] + mid[0]) / 2.0, (corner[1] + mid[1]) / 2.0],
-                )
-            };
-            let neck_curve = |a: [f64; 2], b: [f64; 2]| match p.neckline {
-                Neckline::V => None,
-                Neckline::Scoop => {
-                    // Horizontal at the centre, falling steeply from the neck point.
-                    let centre = if a[0] == 0.0 { a } else { b };
-                    let side = if a[0] == 0.0 { b } else { a };
-                    Some(quadratic(a, b, [side[0], centre[1]]))
-                }
-                Neckline::Round => {
-                    // The circle through both ends that is horizontal at the centre of the
-                    // neckline: r = (dx^2 + dy^2) / (2 dy), its centre above the neckline.
-                    let (dx, dy) = ((a[0] - b[0]).abs(), (a[1] - b[1]).abs().max(1e-6));
-                    let radius = (dx * dx + dy * dy) / (2.0 * dy);
-                    Some(json!({"type": "circle", "params": [radius, false, a[0] < b[0]]}))
-                }
-            };
-            let curves: Vec<Option<Value>> = vec![
-                None,
-                None,
-                Some(scoop(v[2], v[3])),
-                None,
-                neck_curve(v[4], v[5]),
-                neck_curve(v[5], v[6]),
-                None,
-                Some(scoop(v[7], v[8])),
-                None,
-            ];
-            let (name, z, edges) = if front {
-                let edges: Vec<Value> = (0..9)
-                    .map(|i| edge(i, (i + 1) % 9, curves[i].clone()))
-                    .collect();
-                ("front", FRONT_Z, edges)
-            } else {
-                // Clockwise: the same corners in reverse order; reversed curves keep their shape
-                // when their control points are recomputed for the reversed direction.
-                let edges: Vec<Value> = (0..9)
-                    .map(|k| {
-                        let (a, b) = ((9 - k) % 9, (17 - k) % 9);
-                        let c = match b {
-                            2 => Some(scoop(v[3], v[2])),
-                            7 => Some(scoop(v[8], v[7])),
-                            4 => neck_curve(v[5], v[4]),
-                            5 => neck_curve(v[6], v[5]),
-                            _ => None,
-                        };
-                        edge(a, b, c)
-                    })
-                    .collect();
-                ("back", BACK_Z, edges)
-            };
-            panels.insert(
-                name.into(),
-                json!({
-                    "translation": [0.0, p.hem_height, z],
-                    "rotation": [0.0, 0.0, 0.0],
-                    "vertices": v,
-                    "edges": edges,
-                }),
-            );
+            let (name, panel) = self.bodice_panel(front, depth);
+            panels.insert(name.into(), panel);
         }
         let st = |a: &str, ea: usize, b: &str, eb: usize| json!([{"panel": a, "edge": ea}, {"panel": b, "edge": eb}]);
         // Front edges: 1 side +x, 3 shoulder +x, 6 shoulder -x, 8 side -x, 2 / 7 armholes.
@@ -451,8 +372,9 @@ impl DesignParams {
         stitches.push(st("front", 8, "back", 0));
         stitches.push(st("front", 3, "back", 5));
         stitches.push(st("front", 6, "back", 2));
-        if sleeves {
-            self.add_sleeves(&mut panels, &mut stitches, [wc, ya], [xs, ys]);
+        if p.sleeve_length > 0.0 {
+            let v = self.bodice_corners(p.front_neck_depth);
+            self.add_sleeves(&mut panels, &mut stitches, v[2], v[3]);
         }
         SpecFile {
             pattern: crate::pattern::PatternJson {
@@ -472,6 +394,100 @@ impl DesignParams {
                 units_in_meter: 100.0,
             },
         }
+    }
+
+    /// The bodice's nine corners, counter-clockwise for the front: hem, +x side, armhole,
+    /// shoulder, neck, centre of the neckline (`depth` below the neck points), then the -x
+    /// side.
+    fn bodice_corners(&self, depth: f64) -> [[f64; 2]; 9] {
+        let p = self;
+        let ya = ARMPIT_Y - p.armhole_drop - p.hem_height;
+        let ys = SHOULDER_Y - p.hem_height;
+        let yn = NECK_Y - p.hem_height;
+        let (wh, wc, xs, xn) = (
+            p.hem_half_width,
+            p.chest_half_width,
+            p.shoulder_half_width,
+            p.neck_half_width,
+        );
+        [
+            [-wh, 0.0],
+            [wh, 0.0],
+            [wc, ya],
+            [xs, ys],
+            [xn, yn],
+            [0.0, yn - depth],
+            [-xn, yn],
+            [-xs, ys],
+            [-wc, ya],
+        ]
+    }
+
+    /// The neckline's curve from `a` to `b` (one of them its centre), by neckline kind.
+    fn neck_curve(&self, a: [f64; 2], b: [f64; 2]) -> Option<Value> {
+        match self.neckline {
+            Neckline::V => None,
+            Neckline::Scoop => {
+                // Horizontal at the centre, falling steeply from the neck point.
+                let centre = if a[0] == 0.0 { a } else { b };
+                let side = if a[0] == 0.0 { b } else { a };
+                Some(quadratic(a, b, [side[0], centre[1]]))
+            }
+            Neckline::Round => {
+                // The circle through both ends that is horizontal at the centre of the
+                // neckline: r = (dx^2 + dy^2) / (2 dy), its centre above the neckline.
+                let (dx, dy) = ((a[0] - b[0]).abs(), (a[1] - b[1]).abs().max(1e-6));
+                let radius = (dx * dx + dy * dy) / (2.0 * dy);
+                Some(json!({"type": "circle", "params": [radius, false, a[0] < b[0]]}))
+            }
+        }
+    }
+
+    /// The front (edges counter-clockwise) or back (clockwise) bodice panel as GarmentCode
+    /// JSON, with its name.
+    fn bodice_panel(&self, front: bool, depth: f64) -> (&'static str, Value) {
+        let v = self.bodice_corners(depth);
+        let (name, z, edges) = if front {
+            let curves: [Option<Value>; 9] = [
+                None,
+                None,
+                Some(armhole_scoop(v[2], v[3])),
+                None,
+                self.neck_curve(v[4], v[5]),
+                self.neck_curve(v[5], v[6]),
+                None,
+                Some(armhole_scoop(v[7], v[8])),
+                None,
+            ];
+            let edges: Vec<Value> = (0..9)
+                .map(|i| edge(i, (i + 1) % 9, curves[i].clone()))
+                .collect();
+            ("front", FRONT_Z, edges)
+        } else {
+            // Clockwise: the same corners in reverse order; reversed curves keep their shape
+            // when their control points are recomputed for the reversed direction.
+            let edges: Vec<Value> = (0..9)
+                .map(|k| {
+                    let (a, b) = ((9 - k) % 9, (17 - k) % 9);
+                    let c = match b {
+                        2 => Some(armhole_scoop(v[3], v[2])),
+                        7 => Some(armhole_scoop(v[8], v[7])),
+                        4 => self.neck_curve(v[5], v[4]),
+                        5 => self.neck_curve(v[6], v[5]),
+                        _ => None,
+                    };
+                    edge(a, b, c)
+                })
+                .collect();
+            ("back", BACK_Z, edges)
+        };
+        let panel = json!({
+            "translation": [0.0, self.hem_height, z],
+            "rotation": [0.0, 0.0, 0.0],
+            "vertices": v,
+            "edges": edges,
+        });
+        (name, panel)
     }
 
     fn add_sleeves(

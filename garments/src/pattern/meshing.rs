@@ -65,40 +65,8 @@ impl Pattern {
             )));
         }
         let target = edge_length_m / self.metres_per_unit;
-        // The size of the result, estimated before anything is allocated: a pattern in the
-        // wrong units, a wild curvature or a tiny edge length would otherwise mesh for hours.
-        let max_area = 3f64.sqrt() / 4.0 * target * target;
-        let estimate: f64 = self
-            .panels
-            .iter()
-            .map(|p| {
-                let outline: f64 = (0..p.edges.len()).map(|e| p.edge_length(e) / target).sum();
-                outline + signed_area(&p.vertices).abs() / max_area
-            })
-            .sum();
-        if estimate.is_nan() || estimate > MAX_PATTERN_VERTICES as f64 {
-            return Err(Error::Pattern(format!(
-                "meshing at {edge_length_m} m would make about {estimate:.3e} vertices, more \
-                 than {MAX_PATTERN_VERTICES}: the pattern is {} m across (its units or \
-                 curvatures are wrong) or the edge length is too small",
-                self.extent_m()
-            )));
-        }
-        // Vertex count per edge; stitched edges take the larger of the two.
-        let mut counts: Vec<Vec<usize>> = self
-            .panels
-            .iter()
-            .map(|p| {
-                (0..p.edges.len())
-                    .map(|e| ((p.edge_length(e) / target).ceil() as usize + 1).max(2))
-                    .collect()
-            })
-            .collect();
-        for s in &self.stitches {
-            let n = counts[s.a.panel][s.a.edge].max(counts[s.b.panel][s.b.edge]);
-            counts[s.a.panel][s.a.edge] = n;
-            counts[s.b.panel][s.b.edge] = n;
-        }
+        self.check_size(edge_length_m, target)?;
+        let counts = self.edge_counts(target);
         let mut garment = Garment {
             name: self.name.clone(),
             panels: self.panels.iter().map(|p| p.name.clone()).collect(),
@@ -162,6 +130,60 @@ impl Pattern {
             vs.dedup();
         }
         garment.vertex_labels = labels;
+        let stitch_pairs = self.stitch_pairs(&edge_vertices);
+        garment.validate()?;
+        Ok(SewnMesh {
+            garment,
+            stitch_pairs,
+        })
+    }
+
+    /// Refuses a meshing whose size, estimated before anything is allocated, passes
+    /// MAX_PATTERN_VERTICES: a pattern in the wrong units, a wild curvature or a tiny edge
+    /// length would otherwise mesh for hours. `target` is the edge length in pattern units.
+    fn check_size(&self, edge_length_m: f64, target: f64) -> Result<()> {
+        let max_area = 3f64.sqrt() / 4.0 * target * target;
+        let estimate: f64 = self
+            .panels
+            .iter()
+            .map(|p| {
+                let outline: f64 = (0..p.edges.len()).map(|e| p.edge_length(e) / target).sum();
+                outline + signed_area(&p.vertices).abs() / max_area
+            })
+            .sum();
+        if estimate.is_nan() || estimate > MAX_PATTERN_VERTICES as f64 {
+            return Err(Error::Pattern(format!(
+                "meshing at {edge_length_m} m would make about {estimate:.3e} vertices, more \
+                 than {MAX_PATTERN_VERTICES}: the pattern is {} m across (its units or \
+                 curvatures are wrong) or the edge length is too small",
+                self.extent_m()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Vertex count per edge of every panel; stitched edges take the larger of the two.
+    fn edge_counts(&self, target: f64) -> Vec<Vec<usize>> {
+        let mut counts: Vec<Vec<usize>> = self
+            .panels
+            .iter()
+            .map(|p| {
+                (0..p.edges.len())
+                    .map(|e| ((p.edge_length(e) / target).ceil() as usize + 1).max(2))
+                    .collect()
+            })
+            .collect();
+        for s in &self.stitches {
+            let n = counts[s.a.panel][s.a.edge].max(counts[s.b.panel][s.b.edge]);
+            counts[s.a.panel][s.a.edge] = n;
+            counts[s.b.panel][s.b.edge] = n;
+        }
+        counts
+    }
+
+    /// The stitch pairs from every edge's global vertex indices (start to end), matched along
+    /// each stitch (reversed unless the stitch is right side to wrong side).
+    fn stitch_pairs(&self, edge_vertices: &[Vec<Vec<u32>>]) -> Vec<[u32; 2]> {
         let mut stitch_pairs = Vec::new();
         for s in &self.stitches {
             let a = &edge_vertices[s.a.panel][s.a.edge];
@@ -174,11 +196,7 @@ impl Pattern {
                 }
             }
         }
-        garment.validate()?;
-        Ok(SewnMesh {
-            garment,
-            stitch_pairs,
-        })
+        stitch_pairs
     }
 }
 

@@ -133,31 +133,57 @@ fn rotation_between(from: &Vector3<f64>, to: &Vector3<f64>) -> UnitQuaternion<f6
     })
 }
 
-/// Retargets `bvh` through `map` onto the shaped body `shaped` (its rest joints fix the bone
-/// directions and the leg length).
-pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retargeted> {
-    let fail = |problem: String| Error::Bvh {
-        path: bvh.path.clone(),
-        line: 1,
-        problem,
-    };
-    let k = map.bvh_joint;
-    let rest = bvh.rest_positions();
-    let smpl_rest = |j: usize| Vector3::from(shaped.joints[j]);
-    let at = |j: usize| rest[k[j].expect("required joints are mapped")];
+/// The capture's rest pose seen through a joint map, beside the shaped body's.
+struct RestPoses<'a> {
+    bvh: &'a Bvh,
+    map: &'a JointMap,
+    shaped: &'a ShapedBody,
+    /// The capture's rest joint positions, per BVH joint.
+    capture: Vec<Vector3<f64>>,
+}
 
-    // The file's axes: up from the pelvis to the highest mapped joint of the trunk, left from
-    // the right hip to the left.
+impl RestPoses<'_> {
+    /// The shaped body's rest joint `j`.
+    fn smpl(&self, j: usize) -> Vector3<f64> {
+        Vector3::from(self.shaped.joints[j])
+    }
+
+    /// The capture's rest position of SMPL joint `j` (a required, so mapped, joint).
+    fn at(&self, j: usize) -> Vector3<f64> {
+        self.capture[self.map.bvh_joint[j].expect("required joints are mapped")]
+    }
+
+    fn fail(&self, problem: String) -> Error {
+        Error::Bvh {
+            path: self.bvh.path.clone(),
+            line: 1,
+            problem,
+        }
+    }
+}
+
+/// The file's axes: up from the pelvis to the highest mapped joint of the trunk (`top`), left
+/// from the right hip to the left, forward their cross product; `c` turns the file's axes
+/// into SMPL's.
+struct FileAxes {
+    top: usize,
+    up: (usize, f64),
+    forward: Vector3<f64>,
+    c: UnitQuaternion<f64>,
+}
+
+fn file_axes(rest: &RestPoses) -> Result<FileAxes> {
+    let k = &rest.map.bvh_joint;
     let top = [15, 12, 9, 6, 3]
         .into_iter()
-        .find(|&j| k[j].is_some_and(|b| (rest[b] - at(0)).norm() > 0.0))
+        .find(|&j| k[j].is_some_and(|b| (rest.capture[b] - rest.at(0)).norm() > 0.0))
         .ok_or_else(|| {
-            fail("no mapped trunk joint above the pelvis: cannot tell which way is up".into())
+            rest.fail("no mapped trunk joint above the pelvis: cannot tell which way is up".into())
         })?;
-    let up = snap(&(at(top) - at(0)));
-    let left = snap(&(at(1) - at(2)));
+    let up = snap(&(rest.at(top) - rest.at(0)));
+    let left = snap(&(rest.at(1) - rest.at(2)));
     if up.0 == left.0 {
-        return Err(fail(format!(
+        return Err(rest.fail(format!(
             "the rest pose's up ({}) and left ({}) are the same axis",
             axis_name(up),
             axis_name(left)
@@ -169,34 +195,45 @@ pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retarg
         v
     };
     let (left_v, up_v) = (unit(left), unit(up));
-    let forward_v = left_v.cross(&up_v);
+    let forward = left_v.cross(&up_v);
     let c = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
-        Matrix3::from_rows(&[left_v.transpose(), up_v.transpose(), forward_v.transpose()]),
+        Matrix3::from_rows(&[left_v.transpose(), up_v.transpose(), forward.transpose()]),
     ));
+    Ok(FileAxes {
+        top,
+        up,
+        forward,
+        c,
+    })
+}
 
-    // Metres per unit: the map's, or the SMPL legs over the capture's.
+/// Metres per unit: the map's, or the SMPL legs over the capture's; with where it came from.
+fn scale(rest: &RestPoses) -> Result<(f64, &'static str)> {
+    if let Some(m) = rest.map.metres_per_unit {
+        return Ok((m, "joint map"));
+    }
     let leg = |p: &dyn Fn(usize) -> Vector3<f64>, hip: usize, knee: usize, ankle: usize| {
         (p(hip) - p(knee)).norm() + (p(knee) - p(ankle)).norm()
     };
-    let (metres_per_unit, scale_from) = match map.metres_per_unit {
-        Some(m) => (m, "joint map"),
-        None => {
-            let capture = leg(&at, 1, 4, 7) + leg(&at, 2, 5, 8);
-            let body = leg(&smpl_rest, 1, 4, 7) + leg(&smpl_rest, 2, 5, 8);
-            if capture <= 0.0 {
-                return Err(fail(
-                    "the capture's legs have zero length: give metres_per_unit in a joint map"
-                        .into(),
-                ));
-            }
-            (body / capture, "leg length")
-        }
-    };
+    let at = |j| rest.at(j);
+    let smpl = |j| rest.smpl(j);
+    let capture = leg(&at, 1, 4, 7) + leg(&at, 2, 5, 8);
+    let body = leg(&smpl, 1, 4, 7) + leg(&smpl, 2, 5, 8);
+    if capture <= 0.0 {
+        return Err(rest.fail(
+            "the capture's legs have zero length: give metres_per_unit in a joint map".into(),
+        ));
+    }
+    Ok((body / capture, "leg length"))
+}
 
-    // Per-bone rest alignment A_j (SMPL rest bone -> the capture's, in SMPL axes).
+/// Per-bone rest alignment A_j (SMPL rest bone -> the capture's, in SMPL axes): the trunk's
+/// joints share one; a joint takes its first mapped descendant's bone, else its ancestor's.
+fn rest_alignment(rest: &RestPoses, axes: &FileAxes) -> [UnitQuaternion<f64>; NUM_JOINTS] {
+    let (k, c, top) = (&rest.map.bvh_joint, axes.c, axes.top);
     let trunk = rotation_between(
-        &(smpl_rest(top) - smpl_rest(0)).normalize(),
-        &(c * (at(top) - at(0))).normalize(),
+        &(rest.smpl(top) - rest.smpl(0)).normalize(),
+        &(c * (rest.at(top) - rest.at(0))).normalize(),
     );
     let mut align = [UnitQuaternion::identity(); NUM_JOINTS];
     for j in 1..NUM_JOINTS {
@@ -204,7 +241,8 @@ pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retarg
             align[j] = trunk;
             continue;
         }
-        let inherited = map
+        let inherited = rest
+            .map
             .mapped_ancestor(j)
             .map_or(UnitQuaternion::identity(), |a| align[a]);
         align[j] = inherited;
@@ -212,8 +250,8 @@ pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retarg
         let mut child = BONE_CHILD[j];
         while let Some(d) = child {
             if let Some(to) = k[d] {
-                let bone = c * (rest[to] - rest[from]);
-                let smpl_bone = smpl_rest(d) - smpl_rest(j);
+                let bone = c * (rest.capture[to] - rest.capture[from]);
+                let smpl_bone = rest.smpl(d) - rest.smpl(j);
                 if bone.norm() > 1e-9 && smpl_bone.norm() > 1e-9 {
                     align[j] = rotation_between(&smpl_bone.normalize(), &bone.normalize());
                     break;
@@ -222,40 +260,70 @@ pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retarg
             child = BONE_CHILD[d];
         }
     }
+    align
+}
 
-    let reference_frame_dropped = bvh.frames() >= 2 && {
+/// Whether frame 0 is a reference pose (a jump past REFERENCE_FRAME_JUMP_DEG to frame 1).
+fn reference_frame(bvh: &Bvh, k: &[Option<usize>; NUM_JOINTS]) -> bool {
+    bvh.frames() >= 2 && {
         let (a, _) = bvh.pose(0);
         let (b, _) = bvh.pose(1);
         k.iter()
             .flatten()
             .any(|&j| a[j].angle_to(&b[j]).to_degrees() > REFERENCE_FRAME_JUMP_DEG)
-    };
-    let first = usize::from(reference_frame_dropped);
+    }
+}
+
+/// SMPL's pose of capture frame `f`: each mapped joint's world rotation carried into SMPL's
+/// axes and rest bones, unmapped joints following their parent; the pelvis translated.
+fn frame_pose(
+    rest: &RestPoses,
+    axes: &FileAxes,
+    align: &[UnitQuaternion<f64>; NUM_JOINTS],
+    metres_per_unit: f64,
+    f: usize,
+) -> FramePose {
+    let (k, c) = (&rest.map.bvh_joint, axes.c);
     let c_inverse = c.inverse();
-    let j0 = smpl_rest(0);
+    let (rotations, positions) = rest.bvh.pose(f);
+    let mut world = [UnitQuaternion::identity(); NUM_JOINTS];
+    let mut pose = [0.0; POSE_DIM];
+    for j in 0..NUM_JOINTS {
+        let parent = SMPL_PARENTS[j].map(|p| world[p]);
+        world[j] = match k[j] {
+            Some(b) => c * rotations[b] * c_inverse * align[j],
+            None => parent.unwrap_or_else(UnitQuaternion::identity),
+        };
+        let local = parent.map_or(world[j], |p| p.inverse() * world[j]);
+        pose[3 * j..3 * j + 3].copy_from_slice(&quat_to_axis_angle(&local));
+    }
+    let pelvis = c * positions[k[0].expect("the pelvis is mapped")] * metres_per_unit;
+    FramePose {
+        pose,
+        transl: (pelvis - rest.smpl(0)).into(),
+    }
+}
+
+/// Retargets `bvh` through `map` onto the shaped body `shaped` (its rest joints fix the bone
+/// directions and the leg length). Stages: the file's axes, the scale, the rest alignment,
+/// every frame's pose, the report.
+pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retargeted> {
+    let rest = RestPoses {
+        bvh,
+        map,
+        shaped,
+        capture: bvh.rest_positions(),
+    };
+    let axes = file_axes(&rest)?;
+    let (metres_per_unit, scale_from) = scale(&rest)?;
+    let align = rest_alignment(&rest, &axes);
+    let k = &map.bvh_joint;
+    let reference_frame_dropped = reference_frame(bvh, k);
+    let first = usize::from(reference_frame_dropped);
     let frames = (first..bvh.frames())
-        .map(|f| {
-            let (rotations, positions) = bvh.pose(f);
-            let mut world = [UnitQuaternion::identity(); NUM_JOINTS];
-            let mut pose = [0.0; POSE_DIM];
-            for j in 0..NUM_JOINTS {
-                let parent = SMPL_PARENTS[j].map(|p| world[p]);
-                world[j] = match k[j] {
-                    Some(b) => c * rotations[b] * c_inverse * align[j],
-                    None => parent.unwrap_or_else(UnitQuaternion::identity),
-                };
-                let local = parent.map_or(world[j], |p| p.inverse() * world[j]);
-                pose[3 * j..3 * j + 3].copy_from_slice(&quat_to_axis_angle(&local));
-            }
-            let pelvis = c * positions[k[0].expect("the pelvis is mapped")] * metres_per_unit;
-            FramePose {
-                pose,
-                transl: (pelvis - j0).into(),
-            }
-        })
+        .map(|f| frame_pose(&rest, &axes, &align, metres_per_unit, f))
         .collect();
     let motion = Motion::new(bvh.path.display().to_string(), bvh.fps(), frames)?;
-
     let mapped = (0..NUM_JOINTS)
         .filter_map(|j| k[j].map(|b| (JOINT_NAMES[j], bvh.joints[b].name.clone())))
         .collect();
@@ -278,8 +346,8 @@ pub fn retarget(bvh: &Bvh, map: &JointMap, shaped: &ShapedBody) -> Result<Retarg
             source_fps: bvh.fps(),
             metres_per_unit,
             scale_from,
-            up_axis: axis_name(up),
-            forward_axis: axis_name(snap(&forward_v)),
+            up_axis: axis_name(axes.up),
+            forward_axis: axis_name(snap(&axes.forward)),
             reference_frame_dropped,
         },
     })

@@ -119,6 +119,51 @@ fn metadata_record(meta: &impl Serialize) -> Result<Metadata> {
     })
 }
 
+/// A raw array channel (`topic`, no schema) of `dtype` and `shape`.
+fn array_channel<W: Write + Seek>(
+    writer: &mut mcap::Writer<W>,
+    topic: &str,
+    dtype: &str,
+    shape: String,
+) -> Result<u16> {
+    writer
+        .add_channel(0, topic, OCTET, &raw(dtype, shape))
+        .map_err(mcap_error)
+}
+
+/// The template's four array channels (their one message each queued in `once_arrays`) and
+/// the per-frame garment channel: (its id, the vertex count).
+fn template_channels<W: Write + Seek>(
+    writer: &mut mcap::Writer<W>,
+    t: &TemplateArrays,
+    once_arrays: &mut Vec<(u16, Vec<u8>)>,
+) -> Result<(u16, usize)> {
+    let (v, f, u) = (t.positions.len(), t.triangles.len(), t.uvs.len());
+    let positions = f32_bytes(t.positions.iter().flatten().copied());
+    let uvs = f32_bytes(t.uvs.iter().flatten().copied());
+    for (topic, dtype, shape, bytes) in [
+        (TEMPLATE_POSITIONS_TOPIC, "float32", [v, 3], positions),
+        (
+            TEMPLATE_TRIANGLES_TOPIC,
+            "uint32",
+            [f, 3],
+            u32_bytes(&t.triangles),
+        ),
+        (TEMPLATE_UVS_TOPIC, "float32", [u, 2], uvs),
+        (
+            TEMPLATE_UV_TRIANGLES_TOPIC,
+            "uint32",
+            [f, 3],
+            u32_bytes(&t.uv_triangles),
+        ),
+    ] {
+        let shape = format!("[{}, {}]", shape[0], shape[1]);
+        once_arrays.push((array_channel(writer, topic, dtype, shape)?, bytes));
+    }
+    let garment = array_channel(writer, GARMENT_TOPIC, "float32", format!("[{v}, 3]"))?;
+    Ok((garment, v))
+}
+
 impl<W: Write + Seek> SequenceWriter<W> {
     /// Starts a recording at `fps` frames per second: the metadata (a [`SequenceMeta`] for a
     /// garment sequence, a [`BodySequenceMeta`] for a body one), then what `channels` has.
@@ -141,38 +186,11 @@ impl<W: Write + Seek> SequenceWriter<W> {
         let meta_channel = writer
             .add_channel(meta_schema, META_TOPIC, "json", &none)
             .map_err(mcap_error)?;
-        let mut array = |topic: &str, dtype: &str, shape: String| {
-            writer
-                .add_channel(0, topic, OCTET, &raw(dtype, shape))
-                .map_err(mcap_error)
-        };
         let mut once_arrays: Vec<(u16, Vec<u8>)> = Vec::new();
-        let mut garment = None;
-        if let Some(t) = channels.template {
-            let (v, f, u) = (t.positions.len(), t.triangles.len(), t.uvs.len());
-            let positions = f32_bytes(t.positions.iter().flatten().copied());
-            let uvs = f32_bytes(t.uvs.iter().flatten().copied());
-            for (topic, dtype, shape, bytes) in [
-                (TEMPLATE_POSITIONS_TOPIC, "float32", [v, 3], positions),
-                (
-                    TEMPLATE_TRIANGLES_TOPIC,
-                    "uint32",
-                    [f, 3],
-                    u32_bytes(&t.triangles),
-                ),
-                (TEMPLATE_UVS_TOPIC, "float32", [u, 2], uvs),
-                (
-                    TEMPLATE_UV_TRIANGLES_TOPIC,
-                    "uint32",
-                    [f, 3],
-                    u32_bytes(&t.uv_triangles),
-                ),
-            ] {
-                let shape = format!("[{}, {}]", shape[0], shape[1]);
-                once_arrays.push((array(topic, dtype, shape)?, bytes));
-            }
-            garment = Some((array(GARMENT_TOPIC, "float32", format!("[{v}, 3]"))?, v));
-        }
+        let garment = match channels.template {
+            Some(t) => Some(template_channels(&mut writer, t, &mut once_arrays)?),
+            None => None,
+        };
         let pose = writer
             .add_channel(pose_schema, POSE_TOPIC, "json", &none)
             .map_err(mcap_error)?;
@@ -184,21 +202,27 @@ impl<W: Write + Seek> SequenceWriter<W> {
             ),
             false => None,
         };
-        let mut array = |topic: &str, dtype: &str, shape: String| {
-            writer
-                .add_channel(0, topic, OCTET, &raw(dtype, shape))
-                .map_err(mcap_error)
-        };
         let mut body = None;
         if let Some(faces) = channels.body_faces {
             let nv = faces.iter().flatten().max().map_or(0, |&m| m as usize + 1);
-            let vertices = array(BODY_VERTICES_TOPIC, "float32", format!("[{nv}, 3]"))?;
+            let vertices = array_channel(
+                &mut writer,
+                BODY_VERTICES_TOPIC,
+                "float32",
+                format!("[{nv}, 3]"),
+            )?;
             let shape = format!("[{}, 3]", faces.len());
-            once_arrays.push((array(BODY_FACES_TOPIC, "uint32", shape)?, u32_bytes(faces)));
+            let faces_channel = array_channel(&mut writer, BODY_FACES_TOPIC, "uint32", shape)?;
+            once_arrays.push((faces_channel, u32_bytes(faces)));
             body = Some((vertices, nv));
         }
         let joints = match channels.joints {
-            true => Some(array(BODY_JOINTS_TOPIC, "float32", "[24, 3]".to_string())?),
+            true => Some(array_channel(
+                &mut writer,
+                BODY_JOINTS_TOPIC,
+                "float32",
+                "[24, 3]".to_string(),
+            )?),
             false => None,
         };
         writer

@@ -104,53 +104,9 @@ impl Anderson {
             self.dg[slot].resize(n, 0.0);
         }
         let (fresh, filled) = (self.has_last, self.filled);
-        let mid = n / 2;
-        // f, and the new differences in their slot.
-        {
-            let (g, z) = (&self.g, &self.z);
-            let (last_f, last_g) = (&self.last_f, &self.last_g);
-            let (f0, f1) = self.f.split_at_mut(mid);
-            let (d0, d1) = self.df[slot].split_at_mut(if fresh { mid } else { 0 });
-            let (e0, e1) = self.dg[slot].split_at_mut(if fresh { mid } else { 0 });
-            let differences = |lo: usize, f: &mut [f64], df: &mut [f64], dg: &mut [f64]| {
-                let hi = lo + f.len();
-                for ((f, g), z) in f.iter_mut().zip(&g[lo..hi]).zip(&z[lo..hi]) {
-                    *f = g - z;
-                }
-                if fresh {
-                    for ((d, f), last) in df.iter_mut().zip(&*f).zip(&last_f[lo..hi]) {
-                        *d = f - last;
-                    }
-                    for ((d, g), last) in dg.iter_mut().zip(&g[lo..hi]).zip(&last_g[lo..hi]) {
-                        *d = g - last;
-                    }
-                }
-            };
-            crate::spin_join::join(
-                || differences(0, f0, d0, e0),
-                || differences(mid, f1, d1, e1),
-            );
-        }
-        // Per half: the new difference against every filled slot (the Gram row), and every
-        // slot against f; the halves' sums added in a fixed order.
+        self.differences(fresh, slot);
         let sums = if fresh {
-            let (df, f) = (&self.df[..filled], &self.f);
-            let partial = |range: std::ops::Range<usize>| {
-                let mut sums = [0.0; 2 * MAX_DEPTH];
-                let new = &df[slot][range.clone()];
-                for (q, other) in df.iter().enumerate() {
-                    let other = &other[range.clone()];
-                    sums[q] = dot(new, other);
-                    sums[MAX_DEPTH + q] = dot(other, &f[range.clone()]);
-                }
-                sums
-            };
-            let (a, b) = crate::spin_join::join(|| partial(0..mid), || partial(mid..n));
-            let mut sums = [0.0; 2 * MAX_DEPTH];
-            for (s, (x, y)) in sums.iter_mut().zip(a.iter().zip(&b)) {
-                *s = x + y;
-            }
-            sums
+            self.gram_sums(slot, filled)
         } else {
             [0.0; 2 * MAX_DEPTH]
         };
@@ -164,32 +120,92 @@ impl Anderson {
         std::mem::swap(&mut self.last_f, &mut self.f);
         std::mem::swap(&mut self.last_g, &mut self.g);
         self.has_last = true;
-        let m = filled;
-        if m == 0 {
+        if filled == 0 {
             return false;
         }
-        // Normal equations (dF^T dF + lambda I) gamma = dF^T f over the filled slots; the
-        // small ridge keeps them positive definite when differences repeat (a converged
-        // contact set).
+        let Some(gamma) = self.mixing_weights(filled, &sums[MAX_DEPTH..MAX_DEPTH + filled]) else {
+            return false;
+        };
+        self.blend(&gamma);
+        true
+    }
+
+    /// f = g - z, and (when `fresh`) the new differences of f and g in `slot`, on two halves.
+    fn differences(&mut self, fresh: bool, slot: usize) {
+        let mid = self.g.len() / 2;
+        let (g, z) = (&self.g, &self.z);
+        let (last_f, last_g) = (&self.last_f, &self.last_g);
+        let (f0, f1) = self.f.split_at_mut(mid);
+        let (d0, d1) = self.df[slot].split_at_mut(if fresh { mid } else { 0 });
+        let (e0, e1) = self.dg[slot].split_at_mut(if fresh { mid } else { 0 });
+        let differences = |lo: usize, f: &mut [f64], df: &mut [f64], dg: &mut [f64]| {
+            let hi = lo + f.len();
+            for ((f, g), z) in f.iter_mut().zip(&g[lo..hi]).zip(&z[lo..hi]) {
+                *f = g - z;
+            }
+            if fresh {
+                for ((d, f), last) in df.iter_mut().zip(&*f).zip(&last_f[lo..hi]) {
+                    *d = f - last;
+                }
+                for ((d, g), last) in dg.iter_mut().zip(&g[lo..hi]).zip(&last_g[lo..hi]) {
+                    *d = g - last;
+                }
+            }
+        };
+        crate::spin_join::join(
+            || differences(0, f0, d0, e0),
+            || differences(mid, f1, d1, e1),
+        );
+    }
+
+    /// The new difference (in `slot`) against every filled slot (the Gram row, first
+    /// MAX_DEPTH values), and every slot against f (the rest): per half, the halves' sums
+    /// added in a fixed order.
+    fn gram_sums(&self, slot: usize, filled: usize) -> [f64; 2 * MAX_DEPTH] {
+        let (n, mid) = (self.f.len(), self.f.len() / 2);
+        let (df, f) = (&self.df[..filled], &self.f);
+        let partial = |range: std::ops::Range<usize>| {
+            let mut sums = [0.0; 2 * MAX_DEPTH];
+            let new = &df[slot][range.clone()];
+            for (q, other) in df.iter().enumerate() {
+                let other = &other[range.clone()];
+                sums[q] = dot(new, other);
+                sums[MAX_DEPTH + q] = dot(other, &f[range.clone()]);
+            }
+            sums
+        };
+        let (a, b) = crate::spin_join::join(|| partial(0..mid), || partial(mid..n));
+        let mut sums = [0.0; 2 * MAX_DEPTH];
+        for (s, (x, y)) in sums.iter_mut().zip(a.iter().zip(&b)) {
+            *s = x + y;
+        }
+        sums
+    }
+
+    /// gamma from the normal equations (dF^T dF + lambda I) gamma = dF^T f over the `m`
+    /// filled slots (`df_f` = dF^T f); the small ridge keeps them positive definite when
+    /// differences repeat (a converged contact set). None when they cannot be solved.
+    fn mixing_weights(&self, m: usize, df_f: &[f64]) -> Option<nalgebra::DVector<f64>> {
+        let depth = self.depth;
         let gram = nalgebra::DMatrix::from_fn(m, m, |p, q| self.gram[p * depth + q]);
         let trace = gram.trace();
         if !trace.is_finite() || trace <= 0.0 {
-            return false;
+            return None;
         }
         let ridged = gram + nalgebra::DMatrix::identity(m, m) * (1e-8 * trace);
-        let Some(cholesky) = ridged.cholesky() else {
-            return false;
-        };
-        let gamma = cholesky.solve(&nalgebra::DVector::from_column_slice(
-            &sums[MAX_DEPTH..MAX_DEPTH + m],
-        ));
-        if !gamma.iter().all(|g| g.is_finite()) {
-            return false;
-        }
-        // z = g - dG gamma, into `z` (free until the next `begin`).
+        let gamma = ridged
+            .cholesky()?
+            .solve(&nalgebra::DVector::from_column_slice(df_f));
+        gamma.iter().all(|g| g.is_finite()).then_some(gamma)
+    }
+
+    /// z = g - dG gamma, into `z` (free until the next `begin`), on two halves.
+    fn blend(&mut self, gamma: &nalgebra::DVector<f64>) {
+        let n = self.last_g.len();
+        let mid = n / 2;
         self.z.resize(n, 0.0);
         let (z0, z1) = self.z.split_at_mut(mid);
-        let (g, dg) = (&self.last_g, &self.dg[..m]);
+        let (g, dg) = (&self.last_g, &self.dg[..gamma.len()]);
         let blend = |z: &mut [f64], lo: usize| {
             z.copy_from_slice(&g[lo..lo + z.len()]);
             for (p, gp) in gamma.iter().enumerate() {
@@ -199,7 +215,6 @@ impl Anderson {
             }
         };
         crate::spin_join::join(|| blend(z0, 0), || blend(z1, mid));
-        true
     }
 }
 

@@ -555,6 +555,65 @@ fn write_templates(
     ))
 }
 
+/// Frames written per split, and per template and split.
+struct SplitFrames {
+    splits: BTreeMap<String, SplitInfo>,
+    per_template: Vec<BTreeMap<String, usize>>,
+}
+
+/// Each split's frames encoded (sequences in parallel) and written as shards of `shape`
+/// (`[condition dim, body channels, resolution]`), the train split's sums accumulated.
+#[allow(clippy::too_many_arguments)]
+fn encode_splits(
+    encoder: &Encoder,
+    records: &[ManifestRecord],
+    sequences: &[(PathBuf, Sequence)],
+    sums: &mut TrainSums,
+    loss_masks: &[Vec<bool>],
+    out: &Path,
+    shape: [usize; 3],
+    progress: &(impl Fn() + Sync),
+) -> Result<SplitFrames> {
+    let mut splits = BTreeMap::new();
+    let mut per_template = vec![BTreeMap::<String, usize>::new(); loss_masks.len()];
+    for split in Split::ALL.map(Split::name) {
+        let members: Vec<usize> = (0..records.len())
+            .filter(|&i| encoder.options.lands_in(records[i].sequence.split).name() == split)
+            .collect();
+        if members.is_empty() {
+            continue;
+        }
+        let frames: Vec<Vec<Frame>> = members
+            .par_iter()
+            .map(|&i| {
+                let (path, s) = &sequences[i];
+                let frames = encoder.sequence(i, &records[i], path, s);
+                progress();
+                frames
+            })
+            .collect::<Result<_>>()?;
+        let frames: Vec<Frame> = frames.into_iter().flatten().collect();
+        for f in &frames {
+            if split == Split::Train.name() {
+                sums.add(f, &loss_masks[f.template]);
+            }
+            *per_template[f.template]
+                .entry(split.to_string())
+                .or_default() += 1;
+        }
+        let info = SplitInfo {
+            frames: frames.len(),
+            sequences: members.len(),
+            shards: write_shards(out, split, &frames, encoder.options.shard_frames, shape)?,
+        };
+        splits.insert(split.to_string(), info);
+    }
+    Ok(SplitFrames {
+        splits,
+        per_template,
+    })
+}
+
 /// Turns the datasets in `dirs` (one, or several with the same material ranges) into tensors
 /// in `out`; `progress` is called once per sequence. Stages: the finished sequences read and
 /// checked, the templates' geometry images, each split's frames encoded (sequences in
@@ -600,41 +659,16 @@ pub fn write_tensors(
         with_bodies,
     };
     let mut sums = TrainSums::new(r, dim, body_channels, templates.len());
-    let mut manifest_splits = BTreeMap::new();
-    let mut template_frames = vec![BTreeMap::<String, usize>::new(); templates.len()];
-    for split in Split::ALL.map(Split::name) {
-        let members: Vec<usize> = (0..records.len())
-            .filter(|&i| options.lands_in(records[i].sequence.split).name() == split)
-            .collect();
-        if members.is_empty() {
-            continue;
-        }
-        let frames: Vec<Vec<Frame>> = members
-            .par_iter()
-            .map(|&i| {
-                let (path, s) = &sequences[i];
-                let frames = encoder.sequence(i, &records[i], path, s);
-                progress();
-                frames
-            })
-            .collect::<Result<_>>()?;
-        let frames: Vec<Frame> = frames.into_iter().flatten().collect();
-        for f in &frames {
-            if split == Split::Train.name() {
-                sums.add(f, &loss_masks[f.template]);
-            }
-            *template_frames[f.template]
-                .entry(split.to_string())
-                .or_default() += 1;
-        }
-        let shape = [dim, body_channels, r];
-        let info = SplitInfo {
-            frames: frames.len(),
-            sequences: members.len(),
-            shards: write_shards(out, split, &frames, options.shard_frames, shape)?,
-        };
-        manifest_splits.insert(split.to_string(), info);
-    }
+    let split_frames = encode_splits(
+        &encoder,
+        &records,
+        &sequences,
+        &mut sums,
+        &loss_masks,
+        out,
+        [dim, body_channels, r],
+        &progress,
+    )?;
     let (templates_sha256, positions) =
         write_templates(out, &templates, &loss_masks, &sums.templates, r)?;
     let manifest = TensorManifest {
@@ -654,7 +688,7 @@ pub fn write_tensors(
         condition_dim: dim,
         material_ranges: material,
         body_model: model.name().to_string(),
-        splits: manifest_splits,
+        splits: split_frames.splits,
         joined_to_train: Split::ALL
             .iter()
             .zip(options.train_splits)
@@ -669,7 +703,7 @@ pub fn write_tensors(
                 index: i,
                 vertices: t.positions.len(),
                 coverage: image.atlas().coverage(),
-                frames: template_frames[i].clone(),
+                frames: split_frames.per_template[i].clone(),
             })
             .collect(),
         templates_sha256,

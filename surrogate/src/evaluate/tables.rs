@@ -219,39 +219,51 @@ fn header(first: &str, columns: &[&str]) -> String {
 /// factor at a time, the guidance ablation, and every metric of every split.
 pub fn tables(splits: &SplitRows, simulation: &BTreeMap<String, MethodScores>) -> String {
     let mut md = String::new();
-    let paper = paper_numbers();
     if let Some(test) = splits.get("test") {
-        let _ = writeln!(
-            md,
-            "## Table 2: unseen garment x motion x shape (split `test`)\n\n{}",
-            header(
-                "method",
-                &["E_v", "E_CD", "E_n", "E_c", "E_b", "E_s", "E_d", "fps"]
-            )
-        );
-        for (m, s) in test {
-            let v = ["E_v", "E_CD", "E_n", "E_c", "E_b", "E_s", "E_d", "fps"]
-                .map(|k| format!("{:.2}", value(s, k)));
-            let _ = writeln!(md, "{}", row(&format!("ours: {}", m.name()), v.into_iter()));
-        }
-        for p in paper["table2_unseen_garment_motion_shape"]
-            .as_array()
-            .into_iter()
-            .flatten()
-        {
-            let v =
-                ["E_v", "E_CD", "E_n", "E_c", "E_b", "E_s", "E_d", "fps"].map(|k| match &p[k] {
-                    Value::String(s) => s.clone(),
-                    other => format!("{:.2}", other.as_f64().unwrap_or(f64::NAN)),
-                });
-            let name = format!("paper: {}", p["method"].as_str().unwrap_or(""));
-            let _ = writeln!(md, "{}", row(&name, v.into_iter()));
-        }
-        let _ = writeln!(
-            md,
-            "\nThe paper's rows were measured on its data (GarmentCodeData designs, AMASS), not ours.\n"
-        );
+        table2(&mut md, test);
     }
+    one_factor_table(&mut md, splits);
+    guidance_table(&mut md, splits);
+    every_metric(&mut md, splits, simulation);
+    md
+}
+
+/// The paper's Table 2 layout for the `test` split, with the paper's rows.
+fn table2(md: &mut String, test: &BTreeMap<Method, MethodScores>) {
+    let paper = paper_numbers();
+    let _ = writeln!(
+        md,
+        "## Table 2: unseen garment x motion x shape (split `test`)\n\n{}",
+        header(
+            "method",
+            &["E_v", "E_CD", "E_n", "E_c", "E_b", "E_s", "E_d", "fps"]
+        )
+    );
+    for (m, s) in test {
+        let v = ["E_v", "E_CD", "E_n", "E_c", "E_b", "E_s", "E_d", "fps"]
+            .map(|k| format!("{:.2}", value(s, k)));
+        let _ = writeln!(md, "{}", row(&format!("ours: {}", m.name()), v.into_iter()));
+    }
+    for p in paper["table2_unseen_garment_motion_shape"]
+        .as_array()
+        .into_iter()
+        .flatten()
+    {
+        let v = ["E_v", "E_CD", "E_n", "E_c", "E_b", "E_s", "E_d", "fps"].map(|k| match &p[k] {
+            Value::String(s) => s.clone(),
+            other => format!("{:.2}", other.as_f64().unwrap_or(f64::NAN)),
+        });
+        let name = format!("paper: {}", p["method"].as_str().unwrap_or(""));
+        let _ = writeln!(md, "{}", row(&name, v.into_iter()));
+    }
+    let _ = writeln!(
+        md,
+        "\nThe paper's rows were measured on its data (GarmentCodeData designs, AMASS), not ours.\n"
+    );
+}
+
+/// E_v of every method on the one-unseen-factor splits, beside the paper's full model.
+fn one_factor_table(md: &mut String, splits: &SplitRows) {
     let factors: Vec<&String> = splits.keys().filter(|s| one_factor(s).is_some()).collect();
     if !factors.is_empty() {
         let methods: Vec<Method> = Method::ALL
@@ -279,6 +291,10 @@ pub fn tables(splits: &SplitRows, simulation: &BTreeMap<String, MethodScores>) -
         }
         let _ = writeln!(md);
     }
+}
+
+/// With and without guidance, on the splits scored both ways.
+fn guidance_table(md: &mut String, splits: &SplitRows) {
     let ablation: Vec<(&String, &MethodScores, &MethodScores)> = splits
         .iter()
         .filter_map(|(s, m)| Some((s, m.get(&Method::Model)?, m.get(&Method::ModelNoGuidance)?)))
@@ -308,6 +324,10 @@ pub fn tables(splits: &SplitRows, simulation: &BTreeMap<String, MethodScores>) -
             "| paper, on (100 steps) | 5.20 | 0.62 | | | | 0.4 |\n| paper, off (20 steps) | 5.38 | 0.62 | | | | 2.6 |\n"
         );
     }
+}
+
+/// Every metric of every split, with the simulation's own row.
+fn every_metric(md: &mut String, splits: &SplitRows, simulation: &BTreeMap<String, MethodScores>) {
     for (s, methods) in splits {
         let _ = writeln!(
             md,
@@ -331,7 +351,6 @@ pub fn tables(splits: &SplitRows, simulation: &BTreeMap<String, MethodScores>) -
         let n = methods.values().next().map_or(0, |r| r.sequences);
         let _ = writeln!(md, "\n{n} sequences.\n");
     }
-    md
 }
 
 #[cfg(test)]

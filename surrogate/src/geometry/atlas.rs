@@ -109,6 +109,77 @@ fn charts(uv_count: usize, uv_triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
     (chart, count as usize)
 }
 
+/// The texels inside the UV triangles (`corners`, per triangle) at `r` texels per side, with
+/// their triangle and barycentrics: each triangle's bounding box scanned; the first triangle
+/// (lowest index) holding a texel keeps it. The rest are None.
+fn inside_texels(corners: &[[[f64; 2]; 3]], r: usize) -> (Vec<Option<TexelSample>>, Vec<bool>) {
+    let mut inside = vec![false; r * r];
+    let mut texels: Vec<Option<TexelSample>> = vec![None; r * r];
+    for (t, tri) in corners.iter().enumerate() {
+        let lo = |k: usize| tri.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+        let hi = |k: usize| tri.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        let first = |x: f64| ((x * r as f64 - 0.5).ceil().max(0.0)) as usize;
+        let last = |x: f64| ((x * r as f64 - 0.5).floor().min(r as f64 - 1.0)).max(-1.0);
+        let (i0, i1, j0, j1) = (first(lo(0)), last(hi(0)), first(lo(1)), last(hi(1)));
+        if i1 < 0.0 || j1 < 0.0 {
+            continue;
+        }
+        for j in j0..=j1 as usize {
+            for i in i0..=i1 as usize {
+                let k = j * r + i;
+                if texels[k].is_some() {
+                    continue;
+                }
+                let p = [(i as f64 + 0.5) / r as f64, (j as f64 + 0.5) / r as f64];
+                if let Some(w) = barycentric(p, *tri)
+                    && w.iter().all(|&x| x >= -1e-12)
+                {
+                    texels[k] = Some(TexelSample {
+                        triangle: t as u32,
+                        weights: w,
+                    });
+                    inside[k] = true;
+                }
+            }
+        }
+    }
+    (texels, inside)
+}
+
+/// The texels left outside every triangle, each with its nearest triangle and the
+/// barycentrics extrapolated to it.
+fn nearest_triangles(
+    corners: &[[[f64; 2]; 3]],
+    texels: &[Option<TexelSample>],
+    r: usize,
+) -> Vec<(usize, TexelSample)> {
+    (0..r * r)
+        .into_par_iter()
+        .filter(|&k| texels[k].is_none())
+        .filter_map(|k| {
+            let p = [
+                ((k % r) as f64 + 0.5) / r as f64,
+                ((k / r) as f64 + 0.5) / r as f64,
+            ];
+            let mut best: Option<(f64, TexelSample)> = None;
+            for (t, tri) in corners.iter().enumerate() {
+                let Some(w) = barycentric(p, *tri) else {
+                    continue;
+                };
+                let d = triangle_distance2(p, w, *tri);
+                if best.is_none_or(|(b, _)| d < b) {
+                    let sample = TexelSample {
+                        triangle: t as u32,
+                        weights: w,
+                    };
+                    best = Some((d, sample));
+                }
+            }
+            best.map(|(_, s)| (k, s))
+        })
+        .collect()
+}
+
 impl Atlas {
     /// Builds the atlas of a template's UV layout (`uvs` in [0, 1]^2, one UV triangle per
     /// mesh triangle) at `resolution` texels per side.
@@ -137,66 +208,9 @@ impl Atlas {
             .map(|t| t.map(|c| uvs[c as usize]))
             .collect();
         let r = resolution;
-        let mut inside = vec![false; r * r];
-        let mut texels: Vec<Option<TexelSample>> = vec![None; r * r];
-        // Inside texels: scan each triangle's bounding box; the first triangle (lowest index)
-        // holding a texel keeps it.
-        for (t, tri) in corners.iter().enumerate() {
-            let lo = |k: usize| tri.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
-            let hi = |k: usize| tri.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
-            let first = |x: f64| ((x * r as f64 - 0.5).ceil().max(0.0)) as usize;
-            let last = |x: f64| ((x * r as f64 - 0.5).floor().min(r as f64 - 1.0)).max(-1.0);
-            let (i0, i1, j0, j1) = (first(lo(0)), last(hi(0)), first(lo(1)), last(hi(1)));
-            if i1 < 0.0 || j1 < 0.0 {
-                continue;
-            }
-            for j in j0..=j1 as usize {
-                for i in i0..=i1 as usize {
-                    let k = j * r + i;
-                    if texels[k].is_some() {
-                        continue;
-                    }
-                    let p = [(i as f64 + 0.5) / r as f64, (j as f64 + 0.5) / r as f64];
-                    if let Some(w) = barycentric(p, *tri)
-                        && w.iter().all(|&x| x >= -1e-12)
-                    {
-                        texels[k] = Some(TexelSample {
-                            triangle: t as u32,
-                            weights: w,
-                        });
-                        inside[k] = true;
-                    }
-                }
-            }
-        }
-        // Outside texels: the nearest triangle, barycentrics extrapolated.
-        let nearest: Vec<(usize, TexelSample)> = (0..r * r)
-            .into_par_iter()
-            .filter(|&k| texels[k].is_none())
-            .filter_map(|k| {
-                let p = [
-                    ((k % r) as f64 + 0.5) / r as f64,
-                    ((k / r) as f64 + 0.5) / r as f64,
-                ];
-                let mut best: Option<(f64, TexelSample)> = None;
-                for (t, tri) in corners.iter().enumerate() {
-                    let Some(w) = barycentric(p, *tri) else {
-                        continue;
-                    };
-                    let d = triangle_distance2(p, w, *tri);
-                    if best.is_none_or(|(b, _)| d < b) {
-                        let sample = TexelSample {
-                            triangle: t as u32,
-                            weights: w,
-                        };
-                        best = Some((d, sample));
-                    }
-                }
-                best.map(|(_, s)| (k, s))
-            })
-            .collect();
-        for (k, s) in nearest {
-            texels[k] = Some(s);
+        let (mut texels, inside) = inside_texels(&corners, r);
+        for (k, sample) in nearest_triangles(&corners, &texels, r) {
+            texels[k] = Some(sample);
         }
         let texels: Vec<TexelSample> = texels
             .into_iter()

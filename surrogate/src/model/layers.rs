@@ -255,54 +255,8 @@ impl MixFfn {
             .collect();
         let bias = f32_values(self.depthwise.bias.val());
         let mut gated = vec![0.0f32; b * n * (k / 2)];
-        silu_depthwise_gate(&mut activated, &taps, &bias, g, &mut gated);
+        super::kernels::silu_depthwise_gate(&mut activated, &taps, &bias, g, &mut gated);
         Tensor::from_data(TensorData::new(gated, [b, n, k / 2]), &device)
-    }
-}
-
-/// [`MixFfn::sampling_middle`]'s arithmetic: `values` `[B, G * G, K]` (overwritten with their
-/// SiLU), `taps` `[9, K]`, `bias` `[K]` -> `gated` `[B, G * G, K / 2]`. Compiled again for
-/// AVX2 and picked at run time where the CPU has it (the `multiversion` crate): the same
-/// operations in the same order, eight lanes instead of four, so the results are identical.
-#[multiversion::multiversion(targets("x86_64+avx2"))]
-fn silu_depthwise_gate(
-    values: &mut [f32],
-    taps: &[f32],
-    bias: &[f32],
-    g: usize,
-    gated: &mut [f32],
-) {
-    let (n, k) = (g * g, bias.len());
-    let hidden = k / 2;
-    for v in values.iter_mut() {
-        *v = silu_value(*v);
-    }
-    let mut sum = vec![0.0f32; k];
-    for (src, dst) in values
-        .chunks_exact(n * k)
-        .zip(gated.chunks_exact_mut(n * hidden))
-    {
-        for (token, out) in dst.chunks_exact_mut(hidden).enumerate() {
-            let (row, col) = (token / g, token % g);
-            sum.copy_from_slice(bias);
-            for (tap, w) in taps.chunks_exact(k).enumerate() {
-                let (r, c) = (
-                    (row + tap / 3).wrapping_sub(1),
-                    (col + tap % 3).wrapping_sub(1),
-                );
-                if r >= g || c >= g {
-                    continue; // zero padding
-                }
-                let neighbour = &src[(r * g + c) * k..][..k];
-                for ((s, &w), &x) in sum.iter_mut().zip(w).zip(neighbour) {
-                    *s += w * x;
-                }
-            }
-            let (value, gate) = sum.split_at(hidden);
-            for ((o, &v), &gt) in out.iter_mut().zip(value).zip(gate) {
-                *o = v * silu_value(gt);
-            }
-        }
     }
 }
 
@@ -310,40 +264,6 @@ fn f32_values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
     t.into_data()
         .try_into_vec::<f32>()
         .expect("the model computes in f32")
-}
-
-/// x * sigmoid(x) = x / (1 + e^-x).
-#[inline(always)]
-fn silu_value(x: f32) -> f32 {
-    x / (1.0 + exp_vectorizable(-x))
-}
-
-/// e^x with no call into libm and no branch, so loops over it vectorize: Cody-Waite reduction
-/// x = n ln 2 + r, |r| <= ln 2 / 2, and the degree-6 Taylor polynomial of e^r (truncation
-/// below 1.3e-7 relative). Inputs are clamped to [-87.3, 88.3], where 2^n stays a normal f32;
-/// SiLU only needs e^-x to saturate there. No crate offers a vectorizing f32 exp on stable
-/// Rust without a SIMD framework, which is why it is written here.
-#[inline(always)]
-fn exp_vectorizable(x: f32) -> f32 {
-    const LN2_HI: f32 = 0.693_145_75;
-    const LN2_LO: f32 = 1.428_606_8e-6;
-    // Adding 1.5 * 2^23 rounds to the nearest integer without a branch and leaves that
-    // integer in the low bits, so 2^n is built with integer adds and a shift (a float-to-int
-    // `as` cast saturates lane by lane and stops the loop from vectorizing).
-    const ROUND: f32 = 12_582_912.0;
-    let x = x.clamp(-87.3, 88.3);
-    let shifted = x * std::f32::consts::LOG2_E + ROUND;
-    let n = shifted - ROUND;
-    let r = x - n * LN2_HI - n * LN2_LO;
-    let p = 1.0
-        + r * (1.0
-            + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r / 720.0)))));
-    let two_to_n = (shifted
-        .to_bits()
-        .wrapping_sub(ROUND.to_bits())
-        .wrapping_add(127))
-        << 23;
-    f32::from_bits(two_to_n) * p
 }
 
 #[cfg(test)]
@@ -430,19 +350,6 @@ pub(crate) mod tests {
                 "draw {k}: errors {along:.2e} along the gradient, {random:.2e} across"
             );
         }
-    }
-
-    #[test]
-    fn the_vectorizable_exp_matches_libm() {
-        let mut worst: f32 = 0.0;
-        for i in -87_000..=88_000 {
-            let x = i as f32 * 1e-3;
-            let (fast, libm) = (exp_vectorizable(x), x.exp());
-            worst = worst.max((fast - libm).abs() / libm);
-        }
-        assert!(worst < 5e-7, "largest relative error {worst:e}");
-        assert_eq!(exp_vectorizable(-200.0), (-87.3f32).exp());
-        assert!(silu_value(-200.0).abs() < 1e-30 && silu_value(200.0) == 200.0);
     }
 
     /// The fused one-pass Mix-FFN used in sampling computes what the autodiff path (burn's

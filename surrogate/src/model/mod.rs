@@ -1,9 +1,11 @@
 //! The diffusion transformer of DiT-Garment (Sana-style, burn 0.22 on the `flex` CPU backend):
 //! its configuration (`config.rs`), the block's pieces (`layers.rs`) and the network
-//! (`dit.rs`). Training and sampling live apart (`crate::train`, later `predict`).
+//! (`dit.rs`), and its one hand-written kernel (`kernels.rs`). Training and sampling live apart
+//! (`crate::train`, `crate::predict`).
 
 mod config;
 mod dit;
+mod kernels;
 mod layers;
 
 pub use config::{
