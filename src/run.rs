@@ -36,8 +36,8 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
 }
 
 /// The configuration the flags ask for: the defaults, or a `--config` file, or the
-/// configuration a `--config-from` recording carries, with every given flag over it;
-/// validated here, so a bad value is refused before a garment, motion or model is loaded.
+/// configuration a `--config-from` recording carries, with every given flag over it. It is
+/// checked once, by [`prepare`] (or [`print_config`]), before anything it names is loaded.
 pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     let mut c = match &args.config {
         Some(path) => SceneConfig::load(path)?,
@@ -68,16 +68,14 @@ pub fn resolve_config(args: &SceneArgs) -> Result<SceneConfig> {
     if let Some(v) = args.self_friction {
         c.solver.self_friction = v;
     }
-    c.validate()?;
     Ok(c)
 }
 
 /// The configuration of a scene's inputs alone (`predict`): the defaults or a `--config-from`
-/// recording's, the flags over it, validated.
+/// recording's, the flags over it (checked by [`prepare`]).
 pub fn resolve_inputs(inputs: &SceneInputs) -> Result<SceneConfig> {
     let mut c = base_config(inputs)?;
     apply_inputs(&mut c, inputs)?;
-    c.validate()?;
     Ok(c)
 }
 
@@ -131,8 +129,10 @@ pub fn print_config(args: &SceneArgs, config: &SceneConfig) -> Result<bool> {
     Ok(true)
 }
 
-/// Loads what the configuration names (body model, garment, motion) and builds its scene.
+/// Checks the configuration (the one check of its values), then loads what it names (body
+/// model, garment, motion) and builds its scene.
 pub fn prepare(config: SceneConfig) -> Result<Prepared> {
+    let config = config.validated()?;
     let garment = config.garment.clone();
     let cache = sim::templates::cache_dir();
     Ok(Prepared::load(

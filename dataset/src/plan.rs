@@ -503,7 +503,10 @@ mod tests {
         spec.splits.test_grid_shapes = 0;
         let text = toml::to_string(&spec).unwrap();
         let err = DatasetSpec::parse(&text, std::path::Path::new("grid.toml")).unwrap_err();
-        assert!(err.to_string().contains("split = \"train\""), "{err}");
+        assert!(
+            matches!(&err, crate::Error::Spec { path, message } if path == "grid.toml" && message.contains("split = \"train\"")),
+            "{err}"
+        );
     }
 
     #[test]

@@ -109,7 +109,7 @@ fn apply_solver(c: &mut SceneConfig, solver: Option<&Bound<'_, PyDict>>) -> PyRe
 /// made on first use and cached, as on the command line).
 fn prepare(config: SceneConfig) -> sim::Result<Prepared> {
     let garment = config.garment.clone();
-    Prepared::load(config, &sim::templates::cache_dir(), |path| {
+    Prepared::load(config.validated()?, &sim::templates::cache_dir(), |path| {
         eprintln!(
             "making the template of '{garment}' (first use; cached in {})",
             path.display()

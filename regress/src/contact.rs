@@ -118,7 +118,7 @@ pub(super) fn soft_cloth(long: bool) -> Result<Vec<Outcome>> {
         ..SceneConfig::default()
     };
     let template = (garment.positions, garment.triangles);
-    let scene = Scene::new(config, template, attachments, motion, &model)?;
+    let scene = Scene::new(config.validated()?, template, attachments, motion, &model)?;
     let run = scene.run(&model, |_| Ok(()))?;
     Ok(vec![
         Outcome::new(

@@ -77,7 +77,7 @@ pub fn golden_scene(
         ..SceneConfig::default()
     };
     let template = (garment.positions.clone(), garment.triangles.clone());
-    let scene = Scene::new(config, template, attachments, motion, &model)?;
+    let scene = Scene::new(config.validated()?, template, attachments, motion, &model)?;
     Ok((scene, garment, model))
 }
 

@@ -100,6 +100,28 @@ pub const MAX_BETA: f64 = 10.0;
 /// The most output frames a scene may ask for: the longest motion and both prefixes.
 pub const MAX_FRAMES: usize = motions::MAX_MOTION_FRAMES + 2 * MAX_PREFIX_FRAMES;
 
+/// A scene configuration whose values are checked ([`SceneConfig::validated`]): the one kind
+/// [`crate::scene::Scene::new`] takes, so no scene is built from unchecked values and no later
+/// stage checks them again. Read it through `Deref`; to change it, take it apart
+/// ([`Self::into_inner`]) and validate again.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidSceneConfig(SceneConfig);
+
+impl ValidSceneConfig {
+    /// The configuration, to change (and validate again).
+    pub fn into_inner(self) -> SceneConfig {
+        self.0
+    }
+}
+
+impl std::ops::Deref for ValidSceneConfig {
+    type Target = SceneConfig;
+
+    fn deref(&self) -> &SceneConfig {
+        &self.0
+    }
+}
+
 impl SceneConfig {
     /// Checks every value, naming the key and the bad value in the error.
     pub fn validate(&self) -> Result<()> {
@@ -159,6 +181,13 @@ impl SceneConfig {
         }
         self.material.validate()?;
         self.solver.validate()
+    }
+
+    /// This configuration, its values checked ([`Self::validate`]): the one form a scene is
+    /// built from.
+    pub fn validated(self) -> Result<ValidSceneConfig> {
+        self.validate()?;
+        Ok(ValidSceneConfig(self))
     }
 
     /// The configuration as TOML (what `--print-config` prints and `--config` reads back).

@@ -34,7 +34,7 @@ mod untangle;
 pub mod unwind;
 
 pub use cloth::{ClothMesh, ClothState, Vec3};
-pub use config::SceneConfig;
+pub use config::{SceneConfig, ValidSceneConfig};
 pub use constraints::{Attachment, BendingRest, Seam, Spring};
 pub use contact::Contact;
 pub use error::{BlowUpCause, Error, MeshError, Result};

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use motions::{BodyModel, Motion};
 
-use crate::SceneConfig;
+use crate::ValidSceneConfig;
 use crate::error::{Error, Result};
 use crate::recording::{Channels, SequenceWriter, TemplateArrays};
 use crate::scene::{BodyAttachment, FPS, FrameOutput, RunSummary, Scene};
@@ -33,7 +33,7 @@ impl Prepared {
         garment: Arc<garments::Garment>,
         attachments: Vec<BodyAttachment>,
         motion: Motion,
-        config: SceneConfig,
+        config: ValidSceneConfig,
     ) -> Result<Self> {
         let template = (garment.positions.clone(), garment.triangles.clone());
         let scene = Scene::new(config, template, attachments, motion, &model)?;
@@ -47,7 +47,11 @@ impl Prepared {
     /// The scene `config` names, everything loaded ([`crate::sources`]): its body model, its
     /// garment (a library design's template made on first use in `cache`, `making` called with
     /// its path first) and its motion.
-    pub fn load(config: SceneConfig, cache: &Path, making: impl FnOnce(&Path)) -> Result<Self> {
+    pub fn load(
+        config: ValidSceneConfig,
+        cache: &Path,
+        making: impl FnOnce(&Path),
+    ) -> Result<Self> {
         let model = Arc::new(crate::sources::body_model(
             config.model.as_deref().map(Path::new),
         )?);
@@ -62,7 +66,7 @@ impl Prepared {
         model: Arc<BodyModel>,
         garment: Arc<garments::Garment>,
         attachments: Vec<BodyAttachment>,
-        config: SceneConfig,
+        config: ValidSceneConfig,
     ) -> Result<Self> {
         let shaped = model.shape(&config.betas)?;
         let motion = crate::sources::motion(&config.motion, &model, &shaped)?;
@@ -151,6 +155,7 @@ pub fn write_objs(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::SceneConfig;
 
     /// A coarse built-in skirt (24 x 8) fitted to `model` and draped, with its attachments.
     pub(crate) fn coarse_skirt(model: &BodyModel) -> (garments::Garment, Vec<BodyAttachment>) {
@@ -178,7 +183,14 @@ pub(crate) mod tests {
             .generate(&model, &shaped)
             .unwrap();
         let (model, garment) = (Arc::new(model), Arc::new(garment));
-        Prepared::new(model, garment, attachments, motion, config).unwrap()
+        Prepared::new(
+            model,
+            garment,
+            attachments,
+            motion,
+            config.validated().unwrap(),
+        )
+        .unwrap()
     }
 
     /// A finished run's file holds what `record` writes; a run stopped by its deadline

@@ -151,6 +151,7 @@ mod tests {
         assert!(motion("moonwalk", &model, &shaped).is_err());
         let cache = tempfile::tempdir().unwrap();
         let e = garment("cape", &model, cache.path(), |_| {}).unwrap_err();
+        assert!(matches!(&e, Error::Garment { garment, .. } if garment == "cape"));
         assert!(
             e.to_string().starts_with("garment 'cape': unknown garment"),
             "{e}"

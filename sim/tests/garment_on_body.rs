@@ -30,7 +30,14 @@ fn skirt_scene(
         ..SceneConfig::default()
     };
     let template = (garment.positions, garment.triangles);
-    Scene::new(config, template, attachments, motion, model).unwrap()
+    Scene::new(
+        config.validated().unwrap(),
+        template,
+        attachments,
+        motion,
+        model,
+    )
+    .unwrap()
 }
 
 fn ride(motion: &str, betas: &[f64]) -> (f64, f64, f64) {

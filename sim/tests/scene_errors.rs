@@ -33,7 +33,7 @@ fn scene(config: SceneConfig, motion: Motion, model: &BodyModel) -> sim::Result<
         .map(|p| [p.x, p.y + 0.5, p.z + 0.5])
         .collect();
     Scene::new(
-        config,
+        config.validated()?,
         (template, grid.triangles().to_vec()),
         vec![],
         motion,

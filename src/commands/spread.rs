@@ -73,8 +73,7 @@ fn rerun(
     let seq = Sequence::read(&path)?;
     let mut config = Recording::scene_config(&path)?;
     perturbation.apply(&mut config);
-    config.validate()?;
-    let prepared = Prepared::load(config, &sim::templates::cache_dir(), |_| {})?;
+    let prepared = Prepared::load(config.validated()?, &sim::templates::cache_dir(), |_| {})?;
     let truth = Truth::new(&seq, &prepared.model, 0)?;
     let frames = truth.frames();
     let started = Instant::now();

@@ -646,6 +646,9 @@ pub(crate) mod tests {
         let error = StaticMesh::new(&v, open, 0.2)
             .err()
             .expect("open mesh rejected");
-        assert!(error.to_string().contains("not closed"));
+        assert!(
+            matches!(&error, Error::Obstacle { problem, .. } if problem.contains("not closed")),
+            "{error}"
+        );
     }
 }

@@ -15,7 +15,7 @@ use motions::{BlendIn, BodyModel, FramePose, Motion, PosedBody, canonical_a_pose
 use serde::{Deserialize, Serialize};
 
 use crate::cloth::{ClothMesh, ClothState, Vec3, closest_on_triangle};
-use crate::config::SceneConfig;
+use crate::config::ValidSceneConfig;
 use crate::error::{Error, Result};
 use crate::obstacles::{AnimatedMesh, Obstacles};
 use crate::params::{Material, SolverParams};
@@ -26,12 +26,12 @@ use simulation::Simulation;
 /// Output frame rate, frames per second.
 pub const FPS: f64 = 30.0;
 
-/// A garment sequence ready to run: its configuration (validated by [`Scene::new`]) and what
+/// A garment sequence ready to run: its configuration (checked: [`ValidSceneConfig`]) and what
 /// the configuration names, loaded: the template, its body attachments and the motion.
 #[derive(Debug, Clone)]
 pub struct Scene {
     /// The configuration (material, friction, frames, blend-in, solver settings).
-    pub config: SceneConfig,
+    pub config: ValidSceneConfig,
     /// Template rest positions (draped on the canonical body), m.
     pub template: Vec<[f64; 3]>,
     /// Template triangles.
@@ -270,18 +270,16 @@ pub fn edge_stretch(mesh: &ClothMesh, positions: &[Vec3]) -> (f64, f64) {
 }
 
 impl Scene {
-    /// A scene from its configuration, which is validated here (the one check of its values on
-    /// the way to the solver), and what it names, loaded: the template (rest positions and
-    /// triangles), its attachments and the motion. Checks the motion and that the body is
-    /// closed (the inside test needs it).
+    /// A scene from its checked configuration and what it names, loaded: the template (rest
+    /// positions and triangles), its attachments and the motion. Checks the motion and that
+    /// the body is closed (the inside test needs it).
     pub fn new(
-        config: SceneConfig,
+        config: ValidSceneConfig,
         template: (Vec<[f64; 3]>, Vec<[u32; 3]>),
         attachments: Vec<BodyAttachment>,
         motion: Motion,
         model: &BodyModel,
     ) -> Result<Self> {
-        config.validate()?;
         if motion.is_empty() {
             return Err(Error::EmptyMotion {
                 motion: motion.name.clone(),
@@ -342,7 +340,7 @@ impl Scene {
             seed: self.config.seed,
             solver: self.config.solver,
             units: UNITS.into(),
-            config: Some(self.config.clone()),
+            config: Some((*self.config).clone()),
         }
     }
 
