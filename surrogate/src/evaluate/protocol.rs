@@ -364,7 +364,10 @@ mod tests {
         let one = select(&all, &splits(&["test"]), Some(1), manifest).unwrap();
         assert_eq!(ids(one), ["a"]);
         let e = select(&all, &splits(&["nope"]), None, manifest).unwrap_err();
-        assert!(matches!(&e, Error::File { path, .. } if path.ends_with("manifest.jsonl")));
+        assert!(
+            matches!(&e, Error::File { path, .. } if path == "m.jsonl"),
+            "{e}"
+        );
         assert!(e.to_string().contains("no finished sequences"), "{e}");
         let twice = [record("a", "test", true), record("a", "test", true)];
         let e = select(&twice, &splits(&["test"]), None, manifest).unwrap_err();
