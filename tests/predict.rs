@@ -233,7 +233,7 @@ fn bad_inputs_are_named_and_leave_nothing() {
 #[test]
 fn dataset_spread_is_zero_unperturbed_and_small_with_stiffer_cloth() {
     let f = fixture();
-    let data = f.dir.join("data");
+    let data = f.data.clone();
     let dir = tempfile::tempdir().unwrap();
     let e_v = |perturb: &str| {
         let out = dir.path().join(format!("{perturb}.json"));
@@ -261,7 +261,7 @@ fn dataset_spread_is_zero_unperturbed_and_small_with_stiffer_cloth() {
 #[test]
 fn evaluate_ranks_the_baselines_per_family_and_motion() {
     let f = fixture();
-    let data = f.dir.join("data");
+    let data = f.data.clone();
     let dir = tempfile::tempdir().unwrap();
     let scores = dir.path().join("baselines.json");
     ok(&[
@@ -369,7 +369,7 @@ fn the_ground_truth_scored_as_a_prediction_scores_zero() {
 #[test]
 fn evaluate_scores_the_model_writes_its_report_and_reuses_its_cache() {
     let f = fixture();
-    let data = f.dir.join("data");
+    let data = f.data.clone();
     let dir = tempfile::tempdir().unwrap();
     let scores = dir.path().join("model.json");
     let report = dir.path().join("report");
@@ -426,7 +426,7 @@ fn evaluate_scores_the_model_writes_its_report_and_reuses_its_cache() {
 #[test]
 fn evaluate_refuses_unknown_baselines_splits_and_damaged_manifests() {
     let f = fixture();
-    let data = f.dir.join("data");
+    let data = f.data.clone();
     let dir = tempfile::tempdir().unwrap();
     let scores = dir.path().join("refused.json");
     let e = fails(&[

@@ -185,7 +185,7 @@ fn training_refuses_tensors_that_skip_frames() {
         ok(&[
             "dataset",
             "tensors",
-            s(&f.dir.join("data")),
+            s(&f.data),
             "--out",
             s(&skipping),
             "--resolution",

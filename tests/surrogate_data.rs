@@ -10,9 +10,17 @@ use std::path::Path;
 use common::{json, ok, run_with, synth_spec, tiny_spec};
 use serde_json::Value;
 
-/// The tiny dataset, seeded 3.
-fn synth(dir: &Path) -> std::path::PathBuf {
-    synth_spec(dir, "data", &tiny_spec("surrogate-data", 3))
+/// A copy of the shared tiny dataset in `dir` (the tests here damage theirs).
+fn copy_of_tiny(dir: &Path) -> std::path::PathBuf {
+    let copy = dir.join("data");
+    let status = std::process::Command::new("cp")
+        .arg("-r")
+        .arg(common::tiny_dataset())
+        .arg(&copy)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    copy
 }
 
 #[test]
@@ -108,7 +116,7 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 #[test]
 fn dataset_tensors_are_reproducible_readable_in_python_and_refuse_damage() {
     let dir = tempfile::tempdir().unwrap();
-    let data = synth(dir.path());
+    let data = copy_of_tiny(dir.path());
     let (a, b) = (dir.path().join("ta"), dir.path().join("tb"));
     for out in [&a, &b] {
         ok(&[
@@ -271,7 +279,7 @@ fn a_damaged_recording_is_named_and_nothing_written(dir: &Path, data: &Path) {
 #[test]
 fn dataset_tensors_combine_datasets_that_share_material_ranges() {
     let dir = tempfile::tempdir().unwrap();
-    let first = synth(dir.path());
+    let first = common::tiny_dataset();
     let second = synth_spec(dir.path(), "second", &tiny_spec("surrogate-data", 4));
     let other = synth_spec(
         dir.path(),

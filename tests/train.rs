@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use common::{binary, fails, json, ok, python_has, run_with, synth_spec, tiny_spec, tiny_tensors};
+use common::{binary, fails, json, ok, python_has, run_with, tiny_tensors};
 use serde_json::Value;
 
 /// A tiny model and a short schedule: checkpoints every 10 steps.
@@ -40,9 +40,8 @@ fn tensors() -> &'static Path {
             std::env::temp_dir().join(format!("dit-garment-train-test-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let data = synth_spec(&dir, "data", &tiny_spec("train-test", 5));
         let tensors = dir.join("tensors");
-        tiny_tensors(&data, &tensors, &[]);
+        tiny_tensors(&common::tiny_dataset(), &tensors, &[]);
         std::fs::write(dir.join("model.toml"), CONFIG).unwrap();
         tensors
     })

@@ -148,6 +148,35 @@ test_motion = 1
     )
 }
 
+/// The tiny dataset ([`tiny_spec`] named `tiny`, seed 5) every end-to-end test that trains
+/// or scores on one shares, synthesized once per build of the binary: in a folder of the temp
+/// dir named by the binary's modification time and size (a rebuilt engine makes it anew),
+/// under a file lock so test binaries run side by side do not synthesize it twice. Tests
+/// must not change it: one that damages a dataset copies it first.
+pub fn tiny_dataset() -> PathBuf {
+    static DATA: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DATA.get_or_init(|| {
+        let exe = std::fs::metadata(env!("CARGO_BIN_EXE_dit-garment")).unwrap();
+        let built = exe
+            .modified()
+            .unwrap()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos();
+        let dir = std::env::temp_dir().join(format!("dit-garment-tiny-{built:x}-{}", exe.len()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let lock = std::fs::File::create(dir.join("lock")).unwrap();
+        lock.lock().unwrap();
+        let data = dir.join("data");
+        if !data.join("manifest.jsonl").is_file() {
+            // Resumes a synthesis a killed test run left half done.
+            synth_spec(&dir, "data", &tiny_spec("tiny", 5));
+        }
+        data
+    })
+    .clone()
+}
+
 /// Synthesizes `spec` into `dir/<name>` (the spec written beside it as `<name>.toml`).
 pub fn synth_spec(dir: &Path, name: &str, spec: &str) -> PathBuf {
     let path = dir.join(format!("{name}.toml"));
@@ -199,7 +228,7 @@ pub struct TinyRun {
     pub truth: PathBuf,
 }
 
-/// The fixture of the tests that predict: the tiny dataset (named `name`, seed 5), its
+/// The fixture of the tests that predict: the shared tiny dataset ([`tiny_dataset`]), its
 /// tensors (with `tensor_flags`) and `config` trained on them on one thread, in a fresh folder
 /// `<temp>/dit-garment-<name>-<pid>`.
 pub fn tiny_run(name: &str, tensor_flags: &[&str], config: &str) -> TinyRun {
@@ -208,7 +237,7 @@ pub fn tiny_run(name: &str, tensor_flags: &[&str], config: &str) -> TinyRun {
     std::fs::create_dir_all(&dir).unwrap();
     let (tensors, run, config_path) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
     std::fs::write(&config_path, config).unwrap();
-    let data = synth_spec(&dir, "data", &tiny_spec(name, 5));
+    let data = tiny_dataset();
     tiny_tensors(&data, &tensors, tensor_flags);
     let path = |p: &Path| p.to_str().unwrap().to_string();
     let (t, r, c) = (path(&tensors), path(&run), path(&config_path));
