@@ -145,24 +145,7 @@ impl Synthesis<'_> {
                 Ok(prepared) => {
                     frames = prepared.scene.num_frames();
                     let deadline = attempt_started + Duration::from_secs_f64(spec.gates.timeout_s);
-                    match prepared.record_file(&path, &self.software, Some(deadline), |_| Ok(())) {
-                        Ok(summary) => GateResult::judge(&summary, &spec.gates),
-                        Err(sim::Error::Deadline { .. }) => GateResult::unfinished(
-                            format!("time-out after {} s", spec.gates.timeout_s),
-                            true,
-                            true,
-                        ),
-                        Err(e) => {
-                            let finite = !matches!(
-                                e,
-                                sim::Error::BlowUp {
-                                    reason: BlowUpCause::NonFinite,
-                                    ..
-                                }
-                            );
-                            GateResult::unfinished(format!("solver: {e}"), false, finite)
-                        }
-                    }
+                    self.attempt(&prepared, &path, deadline)
                 }
             };
             let passed = gates.passed;
@@ -187,6 +170,29 @@ impl Synthesis<'_> {
             (record.file, record.sha256, record.bytes) = (Some(file), Some(sha), bytes);
         }
         Ok(record)
+    }
+
+    /// One attempt at a prepared sequence, recorded into `path` before `deadline`, judged by
+    /// the spec's gates (a time-out or a solver failure is an unfinished attempt, its cause
+    /// kept: a blow-up to non-finite values is not a finite one).
+    fn attempt(&self, prepared: &Prepared, path: &Path, deadline: Instant) -> GateResult {
+        let gates = &self.spec.gates;
+        match prepared.record_file(path, &self.software, Some(deadline), |_| Ok(())) {
+            Ok(summary) => GateResult::judge(&summary, gates),
+            Err(sim::Error::Deadline { .. }) => {
+                GateResult::unfinished(format!("time-out after {} s", gates.timeout_s), true, true)
+            }
+            Err(e) => {
+                let finite = !matches!(
+                    e,
+                    sim::Error::BlowUp {
+                        reason: BlowUpCause::NonFinite,
+                        ..
+                    }
+                );
+                GateResult::unfinished(format!("solver: {e}"), false, finite)
+            }
+        }
     }
 
     /// The record of a planned sequence after `attempts` (no recording yet).

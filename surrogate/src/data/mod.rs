@@ -7,6 +7,7 @@ mod frames;
 mod manifest;
 mod previous;
 mod sequence;
+mod shards;
 mod stats;
 mod tensors;
 
