@@ -440,7 +440,7 @@ fn evaluate_refuses_unknown_baselines_splits_and_damaged_manifests() {
         "--json",
         s(&scores),
     ]);
-    assert!(e.contains("unknown baseline 'knn'"), "{e}");
+    assert!(e.contains("--baselines = knn: unknown baseline"), "{e}");
     let e = fails(&[
         "evaluate",
         "--model",

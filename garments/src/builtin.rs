@@ -60,9 +60,10 @@ pub fn skirt(name: &str, body: &[[f64; 3]], params: &SkirtParams) -> Result<Garm
         || params.length.is_nan()
         || params.length <= 0.0
     {
-        return Err(Error::Invalid(
-            "skirt needs a body and at least 8 columns and 2 rings".into(),
-        ));
+        return Err(Error::BadParameter {
+            parameter: "skirt",
+            problem: "needs a body, at least 8 columns and 2 rings and a positive length".into(),
+        });
     }
     let (lo, hi) = body
         .iter()

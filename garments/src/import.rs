@@ -261,6 +261,13 @@ pub fn uv_overlap(g: &Garment) -> f64 {
     }
 }
 
+fn unwrap_error(g: &Garment, problem: String) -> Error {
+    Error::Unwrap {
+        garment: g.name.clone(),
+        problem,
+    }
+}
+
 /// New UVs for the whole mesh, one page in [0, 1], per corner; every triangle one panel's.
 /// Charts are cut by the unwrapper, so the garment's panels are kept as labels of triangles.
 pub fn unwrap_uvs(g: &mut Garment) -> Result<()> {
@@ -268,16 +275,16 @@ pub fn unwrap_uvs(g: &mut Garment) -> Result<()> {
     let positions: Vec<[f32; 3]> = g.positions.iter().map(|p| p.map(|c| c as f32)).collect();
     let mesh = uvunwrap::MeshInput::new(&positions, &indices);
     let atlas = uvunwrap::generate(&[mesh], &uvunwrap::Options::default())
-        .map_err(|e| Error::Invalid(format!("'{}': UVs could not be unwrapped: {e}", g.name)))?;
+        .map_err(|e| unwrap_error(g, e.to_string()))?;
     let out = atlas
         .meshes
         .first()
-        .ok_or_else(|| Error::Invalid(format!("'{}': the unwrapper returned no mesh", g.name)))?;
+        .ok_or_else(|| unwrap_error(g, "the unwrapper returned no mesh".into()))?;
     if out.indices.len() != indices.len() || out.vertices.iter().any(|v| v.page.unwrap_or(0) != 0) {
-        return Err(Error::Invalid(format!(
-            "'{}': the unwrapper did not give one UV page for every triangle",
-            g.name
-        )));
+        return Err(unwrap_error(
+            g,
+            "the unwrapper did not give one UV page for every triangle".into(),
+        ));
     }
     g.uvs = out
         .vertices

@@ -53,7 +53,12 @@ impl Garment {
     /// UV triangle and a panel per triangle, UVs in [0, 1], no triangle repeating a vertex.
     /// [`crate::check`] reports more (manifoldness, orientation, scale) and repairs.
     pub fn validate(&self) -> Result<()> {
-        let invalid = |m: String| Err(Error::Invalid(format!("'{}': {m}", self.name)));
+        let invalid = |problem: String| {
+            Err(Error::BadMesh {
+                garment: self.name.clone(),
+                problem,
+            })
+        };
         let n = self.positions.len();
         if self.triangles.is_empty() {
             return invalid("no triangles".into());

@@ -153,7 +153,7 @@ impl BodyModel {
             beta_names,
         };
         Self::from_arrays(arrays).map_err(|e| match e {
-            Error::Invalid(problem) => Error::BadArray {
+            Error::BadModel(problem) => Error::BadArray {
                 path: npz.path().to_path_buf(),
                 key: "model".into(),
                 problem,
@@ -165,7 +165,13 @@ impl BodyModel {
     /// Validates arrays in SMPL's layout and builds a model from them.
     pub fn from_arrays(a: ModelArrays) -> Result<Self> {
         let nv = a.v_template.len();
-        let check = |ok: bool, msg: String| if ok { Ok(()) } else { Err(Error::Invalid(msg)) };
+        let check = |ok: bool, msg: String| {
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::BadModel(msg))
+            }
+        };
         check(nv > 0, "the model has no vertices".into())?;
         check(
             a.num_betas > 0 && a.shapedirs.len() == nv * 3 * a.num_betas,

@@ -26,6 +26,14 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// A pickle of SMPL fits that cannot be read (damaged, or it would run code).
+    #[error("{path}: {problem}")]
+    BadPickle {
+        /// The file (or folder).
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
     /// The file is not a valid .npz (zip of .npy arrays).
     #[error("{path}: not a readable .npz archive: {reason}")]
     NotNpz {
@@ -72,9 +80,34 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
-    /// Inputs to a computation are inconsistent (wrong lengths, non-finite values).
-    #[error("{0}")]
-    Invalid(String),
+    /// A value given to a computation (a beta, a pose or translation component) is NaN or
+    /// infinite.
+    #[error("{what} {index} is not finite")]
+    NotFinite {
+        /// What the value is ("beta", "pose/translation value").
+        what: &'static str,
+        /// Its index in the input.
+        index: usize,
+    },
+    /// A motion cannot be built or resampled as asked.
+    #[error("motion '{name}': {problem}")]
+    BadMotion {
+        /// The motion's name.
+        name: String,
+        /// What is wrong.
+        problem: MotionProblem,
+    },
+    /// A frame index past the motion's end.
+    #[error("frame {frame} is past the motion's {len} frames")]
+    FrameOutOfRange {
+        /// The frame asked for.
+        frame: usize,
+        /// The motion's length in frames.
+        len: usize,
+    },
+    /// Body-model arrays that do not fit SMPL's layout (sizes, parents, weights, values).
+    #[error("the body model's arrays are inconsistent: {0}")]
+    BadModel(String),
     /// A motion name or specification is not known or malformed.
     #[error("unknown motion '{name}': {reason}")]
     UnknownMotion {
@@ -82,6 +115,33 @@ pub enum Error {
         name: String,
         /// Why it was rejected (and what is available).
         reason: String,
+    },
+}
+
+/// Why a motion was rejected ([`Error::BadMotion`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MotionProblem {
+    /// The frame rate (given or asked for) is not a positive number.
+    #[error("frame rate {0} is not a positive number")]
+    FrameRate(f64),
+    /// The motion has no frames.
+    #[error("it has no frames")]
+    NoFrames,
+    /// A frame holds a NaN or infinite value.
+    #[error("frame {0} holds a non-finite value")]
+    NonFiniteFrame(usize),
+    /// Resampling would exceed [`crate::MAX_MOTION_FRAMES`].
+    #[error(
+        "resampled to {fps} fps it would have {frames:.0} frames, more than the {max} a motion \
+         may have (an hour at 30 fps)"
+    )]
+    TooLong {
+        /// The rate asked for.
+        fps: f64,
+        /// The frames it would have.
+        frames: f64,
+        /// The limit.
+        max: usize,
     },
 }
 

@@ -87,7 +87,10 @@ impl BodyModel {
     /// betas on a 10-beta model), missing ones are zero. Non-finite betas are an error.
     pub fn shape(&self, betas: &[f64]) -> Result<ShapedBody> {
         if let Some(i) = betas.iter().position(|b| !b.is_finite()) {
-            return Err(Error::Invalid(format!("beta {i} is not finite")));
+            return Err(Error::NotFinite {
+                what: "beta",
+                index: i,
+            });
         }
         let nb = self.num_betas;
         let mut used = vec![0.0; nb];
@@ -167,9 +170,10 @@ impl BodyModel {
             .chain(&frame.transl)
             .position(|v| !v.is_finite())
         {
-            return Err(Error::Invalid(format!(
-                "pose/translation value {i} is not finite"
-            )));
+            return Err(Error::NotFinite {
+                what: "pose/translation value",
+                index: i,
+            });
         }
         let rotations = local_rotations(&frame.pose);
         let g = self.chain(shaped, &rotations, frame.transl);

@@ -3,7 +3,7 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, MotionProblem, Result};
 use crate::forward::FramePose;
 use crate::rotation::{axis_angle_to_quat, quat_to_axis_angle, slerp_axis_angle};
 use crate::skeleton::{NUM_JOINTS, POSE_DIM};
@@ -87,20 +87,25 @@ impl Motion {
     pub fn new(name: impl Into<String>, fps: f64, frames: Vec<FramePose>) -> Result<Self> {
         let name = name.into();
         if !(fps.is_finite() && fps > 0.0) {
-            return Err(Error::Invalid(format!(
-                "motion '{name}': frame rate {fps} is not a positive number"
-            )));
+            return Err(Error::BadMotion {
+                name,
+                problem: MotionProblem::FrameRate(fps),
+            });
         }
         if frames.is_empty() {
-            return Err(Error::Invalid(format!("motion '{name}' has no frames")));
+            return Err(Error::BadMotion {
+                name,
+                problem: MotionProblem::NoFrames,
+            });
         }
         if let Some(k) = frames
             .iter()
             .position(|f| f.pose.iter().chain(&f.transl).any(|v| !v.is_finite()))
         {
-            return Err(Error::Invalid(format!(
-                "motion '{name}': frame {k} holds a non-finite value"
-            )));
+            return Err(Error::BadMotion {
+                name,
+                problem: MotionProblem::NonFiniteFrame(k),
+            });
         }
         Ok(Self {
             name,
@@ -148,16 +153,20 @@ impl Motion {
     pub fn resample(&self, fps: f64) -> Result<Motion> {
         let frames = self.duration() * fps;
         if frames > MAX_MOTION_FRAMES as f64 {
-            return Err(Error::Invalid(format!(
-                "'{}' resampled to {fps} fps would have {frames:.0} frames, more than the \
-                 {MAX_MOTION_FRAMES} a motion may have (an hour at 30 fps)",
-                self.name
-            )));
+            return Err(Error::BadMotion {
+                name: self.name.clone(),
+                problem: MotionProblem::TooLong {
+                    fps,
+                    frames,
+                    max: MAX_MOTION_FRAMES,
+                },
+            });
         }
         if !(fps.is_finite() && fps > 0.0) {
-            return Err(Error::Invalid(format!(
-                "target frame rate {fps} is not a positive number"
-            )));
+            return Err(Error::BadMotion {
+                name: self.name.clone(),
+                problem: MotionProblem::FrameRate(fps),
+            });
         }
         if (fps - self.fps).abs() < 1e-9 {
             return Ok(self.clone());
@@ -213,10 +222,10 @@ impl Motion {
     /// to and which way it faces are factored out.
     pub fn pose_window(&self, t: usize, l: usize) -> Result<PoseWindow> {
         if t >= self.len() {
-            return Err(Error::Invalid(format!(
-                "frame {t} is past the motion's {} frames",
-                self.len()
-            )));
+            return Err(Error::FrameOutOfRange {
+                frame: t,
+                len: self.len(),
+            });
         }
         let current = &self.frames[t];
         let heading = heading_of(&current.pose);
@@ -352,13 +361,45 @@ mod tests {
     }
 
     #[test]
-    fn empty_or_bad_rate_is_rejected() {
-        assert!(Motion::new("x", 30.0, vec![]).is_err());
+    fn empty_bad_rate_or_non_finite_is_rejected_by_variant() {
+        let problem = |r: Result<Motion>| match r {
+            Err(Error::BadMotion { name, problem }) if name == "x" => problem,
+            other => panic!("expected a BadMotion error, got {other:?}"),
+        };
+        assert_eq!(
+            problem(Motion::new("x", 30.0, vec![])),
+            MotionProblem::NoFrames
+        );
         let f = FramePose {
             pose: [0.0; POSE_DIM],
             transl: [0.0; 3],
         };
-        assert!(Motion::new("x", 0.0, vec![f]).is_err());
-        assert!(Motion::new("x", f64::NAN, vec![f]).is_err());
+        assert_eq!(
+            problem(Motion::new("x", 0.0, vec![f])),
+            MotionProblem::FrameRate(0.0)
+        );
+        assert!(matches!(
+            problem(Motion::new("x", f64::NAN, vec![f])),
+            MotionProblem::FrameRate(r) if r.is_nan()
+        ));
+        let mut bad = f;
+        bad.transl[1] = f64::INFINITY;
+        assert_eq!(
+            problem(Motion::new("x", 30.0, vec![f, bad])),
+            MotionProblem::NonFiniteFrame(1)
+        );
+        let m = Motion::new("x", 30.0, vec![f, f]).unwrap();
+        assert!(matches!(
+            problem(m.resample(-1.0)),
+            MotionProblem::FrameRate(_)
+        ));
+        assert!(matches!(
+            problem(m.resample(1e9)),
+            MotionProblem::TooLong { .. }
+        ));
+        assert!(matches!(
+            m.pose_window(2, 3),
+            Err(Error::FrameOutOfRange { frame: 2, len: 2 })
+        ));
     }
 }

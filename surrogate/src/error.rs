@@ -142,9 +142,96 @@ pub enum Error {
         /// The configuration the run was started with.
         config: String,
     },
-    /// Inputs or settings that cannot be used, said in words.
-    #[error("{0}")]
-    Invalid(String),
+    /// No dataset folder was given to build tensors from.
+    #[error("no dataset folder given")]
+    NoDatasets,
+    /// A manifest record without a recording file (a sequence that did not finish).
+    #[error("sequence {sequence} has no recording")]
+    NoRecording {
+        /// The sequence's id.
+        sequence: String,
+    },
+    /// A recording without a frame of motion after its settling frames.
+    #[error("the sequence of '{garment}' on '{motion}' has no motion frames to score")]
+    NothingToScore {
+        /// The garment.
+        garment: String,
+        /// The motion.
+        motion: String,
+    },
+    /// An input that needs the `lbs_residual` target (its skinning) was asked for without it.
+    #[error("{what} need the lbs_residual target (they are built on its skinning)")]
+    NeedsLbsResidual {
+        /// What was asked for ("body inputs", "nearest-body inputs").
+        what: &'static str,
+    },
+    /// A trained model that does not fit the body model, the condition layout or its own
+    /// statistics.
+    #[error("the model in {run}: {problem}")]
+    ModelMismatch {
+        /// The run folder.
+        run: String,
+        /// What does not fit.
+        problem: String,
+    },
+    /// A motion shorter than the model's pose window.
+    #[error(
+        "the motion '{motion}' has {frames} frames; the model's pose window needs at least {needed}"
+    )]
+    MotionTooShort {
+        /// The motion.
+        motion: String,
+        /// Its frames.
+        frames: usize,
+        /// The frames the window needs.
+        needed: usize,
+    },
+    /// Frames asked past the end of the motion (or of its betas).
+    #[error("frames up to {end} asked of a motion of {len} frames")]
+    FramesOutOfRange {
+        /// One past the last frame asked.
+        end: usize,
+        /// The frames there are.
+        len: usize,
+    },
+    /// The network produced a NaN or infinite vertex.
+    #[error(
+        "frame {frame}: the model predicted a non-finite vertex (its weights or statistics do not \
+         fit this input)"
+    )]
+    NonFinitePrediction {
+        /// The frame.
+        frame: usize,
+    },
+    /// A tensor could not be read back as numbers (burn's `DataError`, in words).
+    #[error("{what}: {problem}")]
+    TensorData {
+        /// Which tensor.
+        what: &'static str,
+        /// burn's error.
+        problem: String,
+    },
+    /// A garment that cannot be prepared for the network (the cause kept as the source).
+    #[error("garment '{garment}': {source}")]
+    GarmentInput {
+        /// The garment's name.
+        garment: String,
+        /// Why.
+        source: Box<Error>,
+    },
+    /// An imported mesh too coarse to split for the engine without passing its vertex budget.
+    #[error(
+        "'{garment}': its edges (median {median_edge_cm:.1} cm) are too long for the engine and \
+         splitting them would pass {max_vertices} vertices"
+    )]
+    TooCoarse {
+        /// The garment's name.
+        garment: String,
+        /// Its median edge length, cm.
+        median_edge_cm: f64,
+        /// The engine's vertex budget.
+        max_vertices: usize,
+    },
     /// A garment mesh that cannot be used.
     #[error(transparent)]
     Garment(#[from] garments::Error),

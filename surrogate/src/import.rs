@@ -138,13 +138,11 @@ pub fn import_garment(
     let mut subdivisions = 0;
     while garments::median_edge_length(&g) > 2.0 * options.edge_length_m {
         if 4 * g.positions.len() > garments::MAX_TEMPLATE_VERTICES {
-            return Err(Error::Invalid(format!(
-                "'{}': its edges (median {:.1} cm) are too long for the engine and splitting them \
-                 would pass {} vertices",
-                g.name,
-                100.0 * garments::median_edge_length(&g),
-                garments::MAX_TEMPLATE_VERTICES
-            )));
+            return Err(Error::TooCoarse {
+                garment: g.name.clone(),
+                median_edge_cm: 100.0 * garments::median_edge_length(&g),
+                max_vertices: garments::MAX_TEMPLATE_VERTICES,
+            });
         }
         garments::subdivide(&mut g);
         subdivisions += 1;

@@ -183,7 +183,10 @@ pub fn repair_numbered(
     numbers: Option<&[u32]>,
 ) -> Result<(Garment, Vec<String>)> {
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(Error::Invalid(format!("scale {scale} is not positive")));
+        return Err(Error::BadParameter {
+            parameter: "scale",
+            problem: format!("{scale} is not positive"),
+        });
     }
     let mut g = g.clone();
     for p in &mut g.positions {
@@ -193,17 +196,16 @@ pub fn repair_numbered(
     }
     let report = check_numbered(&g, numbers);
     if !report.repairable() {
-        let refused: Vec<String> = report
+        let findings: Vec<String> = report
             .findings
             .iter()
             .filter(|f| f.repair.is_none())
             .map(|f| format!("{} ({}, e.g. {})", f.problem, f.count, f.example))
             .collect();
-        return Err(Error::Invalid(format!(
-            "'{}': {}",
-            g.name,
-            refused.join("; ")
-        )));
+        return Err(Error::Unrepairable {
+            garment: g.name,
+            findings,
+        });
     }
     let done = report.lines();
     if report

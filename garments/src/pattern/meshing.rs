@@ -334,10 +334,10 @@ impl SewnMesh {
     pub fn merged(&self, positions: &[[f64; 3]]) -> Result<Garment> {
         let n = self.garment.positions.len();
         if positions.len() != n {
-            return Err(Error::Invalid(format!(
-                "{} positions for {n} vertices",
-                positions.len()
-            )));
+            return Err(Error::BadParameter {
+                parameter: "positions",
+                problem: format!("{} positions for {n} vertices", positions.len()),
+            });
         }
         let root = self.stitched_roots();
         let mut sum = vec![[0.0; 3]; n];

@@ -175,9 +175,7 @@ fn finished(dir: &DatasetDir) -> Result<Vec<Finished>> {
 /// in all of them), and no sequence may come twice (the same dataset given twice).
 fn combined(dirs: &[PathBuf]) -> Result<(MaterialRanges, Vec<Finished>)> {
     let Some(first) = dirs.first() else {
-        return Err(crate::error::Error::Invalid(
-            "no dataset folder given".into(),
-        ));
+        return Err(crate::error::Error::NoDatasets);
     };
     let material = DatasetSpec::load(&DatasetDir::new(first).spec())?.material;
     let mut all: Vec<Finished> = Vec::new();
@@ -482,9 +480,9 @@ pub fn write_tensors(
     };
     let with_bodies = options.target == TargetKind::LbsResidual;
     if options.nearest && !with_bodies {
-        return Err(crate::error::Error::Invalid(
-            "nearest-body inputs need the lbs_residual target (they extend its body inputs)".into(),
-        ));
+        return Err(crate::error::Error::NeedsLbsResidual {
+            what: "nearest-body inputs",
+        });
     }
     let body_channels = match (with_bodies, options.nearest) {
         (false, _) => 0,

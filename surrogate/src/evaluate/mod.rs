@@ -217,10 +217,10 @@ impl<'a> Truth<'a> {
     pub fn new(seq: &'a Sequence, model: &'a BodyModel, seed: u64) -> Result<Self> {
         let frames: Vec<usize> = (seq.first_motion_frame()..seq.len()).collect();
         if frames.is_empty() {
-            return Err(Error::Invalid(format!(
-                "the sequence of '{}' on '{}' has no motion frames to score",
-                seq.meta.garment, seq.meta.motion
-            )));
+            return Err(Error::NothingToScore {
+                garment: seq.meta.garment.clone(),
+                motion: seq.meta.motion.clone(),
+            });
         }
         let scored: Vec<usize> = (0..frames.len()).step_by(FRAME_STRIDE).collect();
         let mut bodies = Vec::with_capacity(scored.len());

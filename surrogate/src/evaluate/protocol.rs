@@ -17,7 +17,7 @@ use super::baselines::{self, Baseline, FloorMaps};
 use super::tables::{Rows, SequenceResult, aggregate_by, family_of, paper_numbers};
 use super::{Method, Truth};
 use crate::data::Sequence;
-use crate::error::{Error, Result, file_error};
+use crate::error::{Error, Result, bad_value, file_error};
 use crate::predict::{BodySequence, Guidance, Predictor, Settings};
 use crate::run::TrainedModel;
 
@@ -31,9 +31,11 @@ impl Baseline {
             "floor" => (Method::Floor, Baseline::Floor(floor)),
             "rest" => (Method::Rest, Baseline::Rest),
             other => {
-                return Err(Error::Invalid(format!(
-                    "unknown baseline '{other}' (lbs, lbs_nearest, floor, rest)"
-                )));
+                return Err(bad_value(
+                    "--baselines",
+                    other,
+                    "unknown baseline (lbs, lbs_nearest, floor, rest)",
+                ));
             }
         })
     }
@@ -198,8 +200,8 @@ impl Evaluation<'_> {
     /// Scores one sequence with every method; its recording must match the manifest's
     /// checksum.
     pub fn sequence(&self, record: &ManifestRecord) -> Result<SequenceResult> {
-        let file = record.file.as_deref().ok_or_else(|| {
-            Error::Invalid(format!("sequence {} has no recording", record.sequence.id))
+        let file = record.file.as_deref().ok_or_else(|| Error::NoRecording {
+            sequence: record.sequence.id.clone(),
         })?;
         let path = self.data.join(file);
         if let Some(expected) = &record.sha256 {
@@ -376,6 +378,9 @@ mod tests {
         let e = select(&bad, &splits(&["test"]), None, manifest).unwrap_err();
         assert!(e.to_string().contains("not a plain file name"), "{e}");
         let e = Baseline::parse("knn", FloorMaps::default()).unwrap_err();
-        assert!(e.to_string().contains("unknown baseline 'knn'"), "{e}");
+        assert!(
+            matches!(&e, Error::Value { key, value, .. } if key == "--baselines" && value == "knn"),
+            "{e}"
+        );
     }
 }

@@ -178,9 +178,9 @@ impl Targets {
         before: FrameBody,
     ) -> Result<(FrameBase, Vec<[f64; 3]>)> {
         if self.skinning.is_none() {
-            return Err(crate::error::Error::Invalid(
-                "body inputs need the lbs_residual target's skinning".into(),
-            ));
+            return Err(crate::error::Error::NeedsLbsResidual {
+                what: "body inputs",
+            });
         }
         let previous = self.frame_base(model, before)?;
         let previous_world = previous.decode(&vec![[0.0; 3]; self.template.len()]);

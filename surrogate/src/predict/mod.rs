@@ -259,12 +259,14 @@ impl<'a> Predictor<'a> {
     pub fn new(trained: &'a TrainedModel, body: &'a BodyModel) -> Result<Self> {
         let data = &trained.data;
         if data.body_model != body.name() {
-            return Err(Error::Invalid(format!(
-                "the model in {} was trained on the body model '{}', not '{}'",
-                trained.run.display(),
-                data.body_model,
-                body.name()
-            )));
+            return Err(Error::ModelMismatch {
+                run: trained.run.display().to_string(),
+                problem: format!(
+                    "trained on the body model '{}', not '{}'",
+                    data.body_model,
+                    body.name()
+                ),
+            });
         }
         let layout = data.condition_layout(body.num_betas());
         let same_blocks = layout
@@ -273,14 +275,16 @@ impl<'a> Predictor<'a> {
             .zip(&data.condition)
             .all(|(a, b)| (&a.name, a.offset, a.size) == (&b.name, b.offset, b.size));
         if layout.dim() != data.condition_dim || !same_blocks {
-            return Err(Error::Invalid(format!(
-                "the model in {} takes {} condition values; '{}' with a window of {} gives {}",
-                trained.run.display(),
-                data.condition_dim,
-                body.name(),
-                data.window,
-                layout.dim()
-            )));
+            return Err(Error::ModelMismatch {
+                run: trained.run.display().to_string(),
+                problem: format!(
+                    "takes {} condition values; '{}' with a window of {} gives {}",
+                    data.condition_dim,
+                    body.name(),
+                    data.window,
+                    layout.dim()
+                ),
+            });
         }
         Ok(Self {
             trained,
@@ -344,19 +348,17 @@ impl<'a> Predictor<'a> {
         let motion = seq.motion;
         let window = self.layout.window;
         if motion.len() <= window {
-            return Err(Error::Invalid(format!(
-                "the motion '{}' has {} frames; the model's pose window needs at least {}",
-                motion.name,
-                motion.len(),
-                window + 1
-            )));
+            return Err(Error::MotionTooShort {
+                motion: motion.name.clone(),
+                frames: motion.len(),
+                needed: window + 1,
+            });
         }
         if frames.end > motion.len() || frames.end > seq.betas.len() {
-            return Err(Error::Invalid(format!(
-                "frames up to {} asked of a motion of {} frames",
-                frames.end,
-                motion.len().min(seq.betas.len())
-            )));
+            return Err(Error::FramesOutOfRange {
+                end: frames.end,
+                len: motion.len().min(seq.betas.len()),
+            });
         }
         if self.trained.config.model.previous_state {
             return self.predict_in_turn(garment, seq, frames, settings, on_frame);
@@ -492,11 +494,10 @@ impl<'a> Predictor<'a> {
         for (i, &k) in frames.iter().enumerate() {
             inputs.texels.extend_from_slice(&garment.position);
             if model.body_inputs {
-                let bodies = stats.bodies.as_ref().ok_or_else(|| {
-                    Error::Invalid(
-                        "the model takes body inputs; its tensors.json has no statistics for them"
-                            .into(),
-                    )
+                let bodies = stats.bodies.as_ref().ok_or_else(|| Error::ModelMismatch {
+                    run: self.trained.run.display().to_string(),
+                    problem: "takes body inputs; its tensors.json has no statistics for them"
+                        .into(),
                 })?;
                 let before = body_of(k.saturating_sub(1));
                 let nearest = model.body_nearest.then(|| &surfaces[i]);
@@ -535,11 +536,7 @@ fn hand_over(
     on_frame: &mut dyn FnMut(&PredictedFrame) -> Result<()>,
 ) -> Result<()> {
     if !frame.garment.iter().flatten().all(|v| v.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "frame {}: the model predicted a non-finite vertex (its weights or statistics do \
-             not fit this input)",
-            frame.index
-        )));
+        return Err(Error::NonFinitePrediction { frame: frame.index });
     }
     on_frame(frame)
 }

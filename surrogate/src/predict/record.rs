@@ -225,7 +225,10 @@ pub fn predict_scene(
     let template = TemplateArrays::from(garment);
     let mut ready = predictor
         .garment(&template)
-        .map_err(|e| Error::Invalid(format!("garment '{}': {e}", garment.name)))?;
+        .map_err(|e| Error::GarmentInput {
+            garment: garment.name.clone(),
+            source: Box::new(e),
+        })?;
     let frames = input.betas.len().min(input.motion.len());
     let garment_s = started.elapsed().as_secs_f64();
     let seen = r

@@ -216,7 +216,10 @@ impl Batch<'_> {
             let correction = x0_hat
                 .clone()
                 .try_into_vec_as::<f32>()
-                .map_err(|e| Error::Invalid(format!("the sampler's estimate: {e:?}")))
+                .map_err(|e| Error::TensorData {
+                    what: "the sampler's estimate",
+                    problem: format!("{e:?}"),
+                })
                 .and_then(|values| self.correction(&values, scale));
             timing.guidance_s += t.elapsed().as_secs_f64();
             match correction {
@@ -230,8 +233,10 @@ impl Batch<'_> {
         if let Some(e) = failure {
             return Err(e);
         }
-        x.try_into_vec_as()
-            .map_err(|e| Error::Invalid(format!("the sampler's output: {e:?}")))
+        x.try_into_vec_as().map_err(|e| Error::TensorData {
+            what: "the sampler's output",
+            problem: format!("{e:?}"),
+        })
     }
 
     /// Refinement passes on the sample itself: each moves every vertex in the band by its

@@ -74,8 +74,10 @@ pub fn model_dir(name: &str) -> Result<PathBuf> {
         return Ok(dir);
     }
     if name.trim().is_empty() {
-        return Err(Error::Invalid(
-            "--model is empty: give a run or ensemble folder, `builtin` or `builtin-single`".into(),
+        return Err(crate::error::bad_value(
+            "--model",
+            "\"\"",
+            "empty: give a run or ensemble folder, `builtin` or `builtin-single`",
         ));
     }
     let dir = PathBuf::from(name);
