@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-30}"
 bin="${DIT_GARMENT_BIN:?set DIT_GARMENT_BIN to the dit-garment binary}"
-targets=(recording obj ply pattern npz spec scene_config bvh model_run ensemble checkpoint)
+targets=(recording obj ply pattern npz spec scene_config bvh model_run ensemble checkpoint pickle)
 shared=../../shared/testdata
 mkdir -p "${targets[@]/#/corpus/}"
 seeds=$(mktemp -d)
@@ -31,6 +31,8 @@ if [ -d "$shared" ]; then
   cp "$shared"/garmentcode/*.json corpus/pattern/ 2>/dev/null || true
   cp "$shared"/bodies/*.obj corpus/obj/ 2>/dev/null || true
 fi
+cp ../motions/tests/fixtures/pickle/*.pkl ../motions/tests/fixtures/pickle/take/SMPL/*.pkl \
+  corpus/pickle/
 # BVH: CMU's first clip cut to its hierarchy and a few frames (Debian's assimp-testmodels), and a
 # two-joint file written here.
 cmu=/usr/share/assimp/models/BVH/01_01.bvh

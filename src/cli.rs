@@ -371,9 +371,9 @@ pub struct RegressArgs {
 
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// Ground truth: a recording, or a folder of a capture's frames (`.obj` or `.ply` meshes
-    /// of any topology, frame k the k-th file by name), scored by the correspondence-free
-    /// metrics alone.
+    /// Ground truth: a recording, or a folder of a capture's frames (`.obj`, `.ply` or `.pkl`
+    /// meshes of any topology, frame k the k-th file by name; 4D-Dress's pickles are read
+    /// without running them), scored by the correspondence-free metrics alone.
     pub a: PathBuf,
     /// Recording to score (the same garment template as a recording A).
     pub b: PathBuf,
@@ -392,6 +392,11 @@ pub struct CompareArgs {
     /// Seed of the surface samples.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// In a capture of pickled frames that hold one mesh per garment label (4D-Dress's
+    /// `Semantic/clothes/cloth-f*.pkl`: `upper`, `lower`, `outer`, ...), the one to score
+    /// against.
+    #[arg(long)]
+    pub capture_garment: Option<String>,
 }
 
 #[derive(Debug, Args)]

@@ -281,3 +281,30 @@ fn the_shipped_model_predicts_through_cmu_01_01() {
     assert_eq!(j["frames"], 20, "{j}");
     assert_eq!(j["finite"], true, "{j}");
 }
+
+/// 4D-Dress-style SMPL fits (one pickle per frame, written by NumPy) as a motion: shown, posed
+/// and exported as AMASS; a pickle that would run a command is refused naming the callable.
+#[test]
+fn pickled_smpl_fits_are_a_motion_and_code_in_a_pickle_is_refused() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("motions/tests/fixtures/pickle");
+    let take = fixtures.join("take/SMPL");
+    let dir = tempfile::tempdir().unwrap();
+    let shown = dir.path().join("show.json");
+    let arg = format!("{}:fps=15", take.display());
+    ok(&["motions", "show", &arg, "--json", shown.to_str().unwrap()]);
+    let j = json(&shown);
+    // Three fits at 15 fps, resampled to 30 fps: five frames.
+    assert_eq!(
+        (j["frames"].clone(), j["fps"].clone()),
+        (5.into(), 30.0.into()),
+        "{j}"
+    );
+    let npz = dir.path().join("fits.npz");
+    ok(&["motions", "export", &arg, "--out", npz.to_str().unwrap()]);
+    let hostile = fixtures.join("hostile_system.pkl");
+    let e = common::fails(&["motions", "show", hostile.to_str().unwrap()]);
+    assert!(
+        e.contains("hostile_system.pkl") && e.contains("calls os.system"),
+        "{e}"
+    );
+}

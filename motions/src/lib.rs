@@ -17,16 +17,18 @@ pub mod amass;
 mod body_model;
 pub mod bvh;
 mod error;
+pub mod fits;
 mod forward;
 pub mod library;
 mod motion;
 pub mod npz;
+pub mod pickle;
 pub mod rotation;
 mod skeleton;
 pub mod source;
 
 pub use body_model::{BodyModel, ModelArrays, boundary_edges};
-pub use error::{Error, Result};
+pub use error::{Error, MotionProblem, Result};
 pub use forward::{FramePose, PosedBody, ShapedBody, Transform};
 pub use motion::{
     BlendIn, MAX_MOTION_FRAMES, MAX_PREFIX_FRAMES, Motion, PoseWindow, canonical_a_pose,

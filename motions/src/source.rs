@@ -1,8 +1,10 @@
 //! What a motion argument names, everywhere a motion is accepted: a built-in motion
-//! (`walk`, `random:seed=3,speed=1.2`, [`crate::library`]), an AMASS `.npz` file, or a BVH
-//! file. A file may be followed by `:start=S,duration=D` (seconds: a stretch of a long clip)
-//! and, for BVH, `map=FILE.toml` (a joint map for a skeleton no built-in map fits):
-//! `01_01.bvh:start=4,duration=6,map=skeleton.toml`.
+//! (`walk`, `random:seed=3,speed=1.2`, [`crate::library`]), an AMASS `.npz` file, a BVH
+//! file, or SMPL fits in pickles ([`crate::fits`]: a `.pkl` file, or a folder of one per frame
+//! such as a 4D-Dress take's `SMPL/`). A file may be followed by `:start=S,duration=D`
+//! (seconds: a stretch of a long clip), for BVH by `map=FILE.toml` (a joint map for a skeleton
+//! no built-in map fits), for fits by `fps=F` (their frame rate, 30 by default):
+//! `01_01.bvh:start=4,duration=6,map=skeleton.toml`, `Take9/SMPL:fps=30,start=1`.
 
 use std::path::{Path, PathBuf};
 
@@ -24,6 +26,8 @@ pub enum FileFormat {
     Amass,
     /// BVH motion capture, retargeted to SMPL.
     Bvh,
+    /// SMPL fits in Python pickles (y up, SMPL's own frame), one file or a folder of frames.
+    SmplFits,
 }
 
 /// A motion file and the stretch of it to use.
@@ -39,6 +43,8 @@ pub struct FileMotion {
     pub duration: Option<f64>,
     /// A BVH joint map file (`None`: the built-in map that fits).
     pub map: Option<PathBuf>,
+    /// The frame rate of SMPL fits (`None`: [`crate::fits::DEFAULT_FPS`]).
+    pub fps: Option<f64>,
 }
 
 /// A parsed motion argument.
@@ -63,7 +69,12 @@ impl MotionSource {
     /// Parses a motion argument (see the module documentation).
     pub fn parse(text: &str) -> Result<Self> {
         let lower = text.to_ascii_lowercase();
-        for (extension, format) in [(".bvh", FileFormat::Bvh), (".npz", FileFormat::Amass)] {
+        let formats = [
+            (".bvh", FileFormat::Bvh),
+            (".npz", FileFormat::Amass),
+            (".pkl", FileFormat::SmplFits),
+        ];
+        for (extension, format) in formats {
             if lower.ends_with(extension) {
                 return FileMotion::with_parameters(text, format, "").map(Self::File);
             }
@@ -73,6 +84,15 @@ impl MotionSource {
             }
         }
         let path = Path::new(text);
+        if path.is_dir() {
+            return FileMotion::with_parameters(text, FileFormat::SmplFits, "").map(Self::File);
+        }
+        if let Some((folder, parameters)) = text.rsplit_once(':')
+            && Path::new(folder).is_dir()
+        {
+            return FileMotion::with_parameters(folder, FileFormat::SmplFits, parameters)
+                .map(Self::File);
+        }
         if path.exists() {
             let (mut file, _) = files::open(path)?;
             let mut head = [0u8; 9];
@@ -131,6 +151,10 @@ impl MotionSource {
                 let r = bvh::load(&file.path, file.map.as_deref(), shaped)?;
                 (r.motion, Some(r.report))
             }
+            FileFormat::SmplFits => {
+                let fps = file.fps.unwrap_or(crate::fits::DEFAULT_FPS);
+                (crate::fits::load(&file.path, fps)?, None)
+            }
         };
         let mut motion = file.stretch(raw.resample(OUTPUT_FPS)?)?;
         motion.name = file.label();
@@ -153,6 +177,7 @@ impl FileMotion {
             start: 0.0,
             duration: None,
             map: None,
+            fps: None,
         };
         for kv in parameters.split(',').filter(|s| !s.trim().is_empty()) {
             let (key, value) = kv
@@ -177,10 +202,15 @@ impl FileMotion {
                     file.duration = Some(d);
                 }
                 "map" if format == FileFormat::Bvh => file.map = Some(PathBuf::from(value)),
+                "fps" if format == FileFormat::SmplFits => match value.parse::<f64>() {
+                    Ok(fps) if (1.0..=1000.0).contains(&fps) => file.fps = Some(fps),
+                    _ => return Err(bad(format!("fps = '{value}' is not from 1 to 1000"))),
+                },
                 other => {
                     let keys = match format {
                         FileFormat::Bvh => "start, duration, map",
                         FileFormat::Amass => "start, duration",
+                        FileFormat::SmplFits => "start, duration, fps",
                     };
                     return Err(bad(format!("unknown parameter '{other}' ({keys})")));
                 }
@@ -200,6 +230,9 @@ impl FileMotion {
         }
         if let Some(map) = &self.map {
             parts.push(format!("map={}", map.display()));
+        }
+        if let Some(fps) = self.fps {
+            parts.push(format!("fps={fps}"));
         }
         match parts.is_empty() {
             true => self.path.display().to_string(),

@@ -57,7 +57,14 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 /// B scored against the capture frames in the folder A.
 fn against_capture(args: &CompareArgs, model: &motions::BodyModel) -> Result<()> {
     let b = sim::recording::Recording::read(&args.b)?;
-    let c = sim::metrics::compare_with_capture(&args.a, &b, &args.b, model, args.seed)?;
+    let c = sim::metrics::compare_with_capture(
+        &args.a,
+        args.capture_garment.as_deref(),
+        &b,
+        &args.b,
+        model,
+        args.seed,
+    )?;
     if args.per_frame {
         print_frames(c.per_frame.iter().map(|(k, s)| (*k, s.values().to_vec())))?;
     }

@@ -1,5 +1,8 @@
 //! A recording scored against a capture: ground truth whose meshes share no vertices with the
-//! template (a folder of OBJ or PLY frames, one topology per frame or one for all). Only the
+//! template (a folder of OBJ, PLY or pickled frames, one topology per frame or one for all;
+//! the pickles as 4D-Dress ships them, `mesh-f*.pkl` with `vertices` and `faces`, or its
+//! extracted `cloth-f*.pkl`, one such dict per garment label, read without running their
+//! code by `motions::pickle`). Only the
 //! correspondence-free metrics apply: E_CD, E_CD_cm and E_n between surface samples, E_c of
 //! the scored garment against the body, and the distribution of nearest-point distances (its
 //! 90th percentile in cm, which D-Garment reports for real data). E_v, E_b, E_s and E_d need
@@ -141,7 +144,11 @@ pub struct CaptureCompared {
     pub frames: usize,
 }
 
-/// The mesh files of a capture folder (`.obj` or `.ply`), in name order: frame k is the k-th.
+/// The largest pickled capture frame read, bytes (a 4D-Dress scan of 80k faces is ~10 MB).
+const MAX_PICKLE_BYTES: u64 = 512 << 20;
+
+/// The mesh files of a capture folder (`.obj`, `.ply` or `.pkl`), in name order: frame k is
+/// the k-th.
 pub fn capture_frames(dir: &Path) -> Result<Vec<PathBuf>> {
     let refuse = |message: String| Error::Recording {
         path: dir.display().to_string(),
@@ -151,21 +158,114 @@ pub fn capture_frames(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
-            p.extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("obj") || e.eq_ignore_ascii_case("ply"))
+            p.extension().is_some_and(|e| {
+                ["obj", "ply", "pkl"]
+                    .iter()
+                    .any(|x| e.eq_ignore_ascii_case(x))
+            })
         })
         .collect();
     files.sort();
     if files.is_empty() {
-        return Err(refuse("holds no .obj or .ply frames".into()));
+        return Err(refuse("holds no .obj, .ply or .pkl frames".into()));
     }
     Ok(files)
+}
+
+/// One capture frame's vertices and triangles. A pickle holding one dict per garment label
+/// (4D-Dress's `cloth-f*.pkl`) needs `garment`, the label to score against.
+pub fn read_capture_frame(path: &Path, garment: Option<&str>) -> Result<(Vec<P3>, Vec<[u32; 3]>)> {
+    let refuse = |message: String| Error::Recording {
+        path: path.display().to_string(),
+        message,
+    };
+    let pickled = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pkl"));
+    let (positions, triangles) = if pickled {
+        let bytes = files::read(path, MAX_PICKLE_BYTES, "capture frame")?;
+        let value = motions::pickle::read(&bytes).map_err(refuse)?;
+        pickled_mesh(&value, garment).map_err(refuse)?
+    } else {
+        let mesh = garments::read_mesh(path).map_err(|e| refuse(e.to_string()))?;
+        (mesh.positions, mesh.triangles)
+    };
+    if positions.iter().flatten().any(|c| !c.is_finite()) {
+        return Err(refuse("a vertex is not finite".into()));
+    }
+    Ok((positions, triangles))
+}
+
+/// The mesh of a pickled frame: `vertices` (N x 3) and `faces` (M x 3) at the top, or under
+/// the key `garment`.
+fn pickled_mesh(
+    value: &motions::pickle::Value,
+    garment: Option<&str>,
+) -> std::result::Result<(Vec<P3>, Vec<[u32; 3]>), String> {
+    use motions::pickle::Value;
+    let labels = || match value {
+        Value::Dict(items) => items
+            .iter()
+            .filter(|(_, v)| v.get("vertices").is_some())
+            .filter_map(|(k, _)| match k {
+                Value::Str(s) => Some(s.clone()),
+                _ => None,
+            })
+            .collect::<Vec<_>>(),
+        _ => Vec::new(),
+    };
+    let mesh = match (value.get("vertices"), garment) {
+        (Some(_), _) => value,
+        (None, Some(label)) => value.get(label).ok_or_else(|| {
+            format!(
+                "holds no garment '{label}' (it holds: {})",
+                labels().join(", ")
+            )
+        })?,
+        (None, None) if labels().is_empty() => {
+            return Err("holds no `vertices` and `faces` (not a mesh pickle)".into());
+        }
+        (None, None) => {
+            return Err(format!(
+                "holds several garments ({}): name the one to score with --capture-garment",
+                labels().join(", ")
+            ));
+        }
+    };
+    let array = |key: &str| match mesh.get(key) {
+        Some(Value::Array(a)) if a.shape.len() == 2 && a.shape[1] == 3 => Ok(a.data.clone()),
+        Some(Value::Array(a)) => Err(format!("`{key}` has shape {:?}, not N x 3", a.shape)),
+        _ => Err(format!("`{key}` is missing or not an array")),
+    };
+    let vertices = array("vertices")?;
+    let faces = array("faces")?;
+    let n = vertices.len() / 3;
+    let positions = vertices
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let triangles = faces
+        .chunks_exact(3)
+        .map(|f| {
+            let index = |x: f64| {
+                (x >= 0.0 && x.fract() == 0.0 && (x as usize) < n)
+                    .then_some(x as u32)
+                    .ok_or_else(|| format!("a face refers to vertex {x}, past the {n} vertices"))
+            };
+            Ok([index(f[0])?, index(f[1])?, index(f[2])?])
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()?;
+    if triangles.is_empty() {
+        return Err("has no faces".into());
+    }
+    Ok((positions, triangles))
 }
 
 /// Scores recording `b` (its garment, its body for E_c) against the capture frames in `dir`
 /// (frame k of the recording against the k-th file), every [`FRAME_STRIDE`]-th frame.
 pub fn compare_with_capture(
     dir: &Path,
+    garment: Option<&str>,
     b: &Recording,
     b_path: &Path,
     model: &BodyModel,
@@ -182,30 +282,14 @@ pub fn compare_with_capture(
     let scorer = Scorer::new(&b.template.positions, &b.template.triangles, seed);
     let mut per_frame = Vec::new();
     for k in (0..frames).step_by(FRAME_STRIDE) {
-        let truth = garments::read_mesh(&files[k]).map_err(|e| Error::Recording {
-            path: files[k].display().to_string(),
-            message: e.to_string(),
-        })?;
-        if truth.positions.iter().flatten().any(|c| !c.is_finite()) {
-            return Err(Error::Recording {
-                path: files[k].display().to_string(),
-                message: "a vertex is not finite".into(),
-            });
-        }
+        let (truth, truth_triangles) = read_capture_frame(&files[k], garment)?;
         let body = b.body_at(model, k, b_path)?;
         let surface = BodySurface {
             vertices: &body.vertices,
             triangles: &body.faces,
         };
         let pred: Vec<P3> = b.garment[k].iter().map(|p| p.map(f64::from)).collect();
-        let s = score_frame(
-            &scorer,
-            &pred,
-            &truth.positions,
-            &truth.triangles,
-            &surface,
-            k,
-        );
+        let s = score_frame(&scorer, &pred, &truth, &truth_triangles, &surface, k);
         per_frame.push((k, s));
     }
     let mean = CaptureScores::mean(&per_frame.iter().map(|(_, s)| *s).collect::<Vec<_>>());
@@ -237,6 +321,34 @@ mod tests {
             }
         }
         g
+    }
+
+    #[test]
+    fn pickled_frames_are_read_and_a_garment_is_picked_by_label() {
+        let fixtures =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../motions/tests/fixtures/pickle");
+        let (v, t) = read_capture_frame(&fixtures.join("mesh_fortran.pkl"), None).unwrap();
+        assert_eq!(v.len(), 4);
+        assert_eq!(v[1], [1.5, 2.0, 2.5]);
+        assert_eq!(t, vec![[0, 1, 2], [0, 2, 3]]);
+        let cloth = fixtures.join("cloth_two.pkl");
+        let e = read_capture_frame(&cloth, None).unwrap_err().to_string();
+        assert!(
+            e.contains("(upper, lower)") && e.contains("--capture-garment"),
+            "{e}"
+        );
+        let (lower, _) = read_capture_frame(&cloth, Some("lower")).unwrap();
+        assert_eq!(lower[2], [1.0, 1.0, 1.0]);
+        let e = read_capture_frame(&cloth, Some("outer"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no garment 'outer' (it holds: upper, lower)"),
+            "{e}"
+        );
+        let hostile = fixtures.join("hostile_system.pkl");
+        let e = read_capture_frame(&hostile, None).unwrap_err().to_string();
+        assert!(e.contains("calls os.system"), "{e}");
     }
 
     #[test]

@@ -25,7 +25,7 @@ mod capture;
 mod compare;
 pub use capture::{
     CaptureCompared, CaptureScores, NOT_APPLICABLE, capture_frames, compare_with_capture,
-    score_frame as score_capture_frame,
+    read_capture_frame, score_frame as score_capture_frame,
 };
 pub use compare::{Compared, compare, compare_recordings};
 type Tree = ImmutableKdTree<f64, u32, 3, 32>;
