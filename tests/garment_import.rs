@@ -36,9 +36,7 @@ struct Worn {
 fn worn() -> &'static Worn {
     static WORN: OnceLock<Worn> = OnceLock::new();
     WORN.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("dit-garment-import-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = common::process_folder("import");
         let template = dir.join("tank.obj");
         ok(&[
             "garments",
@@ -289,5 +287,5 @@ fn compare_scores_a_recording_against_a_capture_of_another_topology() {
     let empty = w.dir.join("empty");
     std::fs::create_dir_all(&empty).unwrap();
     let e = fails(&["compare", s(&empty), s(&recording)]);
-    assert!(e.contains("no .obj or .ply"), "{e}");
+    assert!(e.contains("no .obj, .ply or .pkl frames"), "{e}");
 }

@@ -36,10 +36,7 @@ val_frames = 4
 fn tensors() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir =
-            std::env::temp_dir().join(format!("dit-garment-train-test-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = common::process_folder("train-test");
         let tensors = dir.join("tensors");
         tiny_tensors(&common::tiny_dataset(), &tensors, &[]);
         std::fs::write(dir.join("model.toml"), CONFIG).unwrap();

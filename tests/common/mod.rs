@@ -228,13 +228,36 @@ pub struct TinyRun {
     pub truth: PathBuf,
 }
 
+/// A fresh folder `<temp>/dit-garment-<name>-<pid>` for one test binary's shared fixture.
+/// Statics are never dropped, so such folders outlive their process: the ones of processes
+/// that have ended (no `/proc/<pid>`) are removed first.
+pub fn process_folder(name: &str) -> PathBuf {
+    let temp = std::env::temp_dir();
+    if Path::new("/proc/self").exists()
+        && let Ok(entries) = std::fs::read_dir(&temp)
+    {
+        let prefix = format!("dit-garment-{name}-");
+        for entry in entries.flatten() {
+            let file_name = entry.file_name();
+            let pid = file_name.to_str().and_then(|f| f.strip_prefix(&prefix));
+            if let Some(pid) = pid.filter(|p| p.bytes().all(|b| b.is_ascii_digit()))
+                && !Path::new("/proc").join(pid).exists()
+            {
+                let _ = std::fs::remove_dir_all(entry.path());
+            }
+        }
+    }
+    let dir = temp.join(format!("dit-garment-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// The fixture of the tests that predict: the shared tiny dataset ([`tiny_dataset`]), its
 /// tensors (with `tensor_flags`) and `config` trained on them on one thread, in a fresh folder
 /// `<temp>/dit-garment-<name>-<pid>`.
 pub fn tiny_run(name: &str, tensor_flags: &[&str], config: &str) -> TinyRun {
-    let dir = std::env::temp_dir().join(format!("dit-garment-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = process_folder(name);
     let (tensors, run, config_path) = (dir.join("tensors"), dir.join("run"), dir.join("m.toml"));
     std::fs::write(&config_path, config).unwrap();
     let data = tiny_dataset();
