@@ -93,7 +93,9 @@ def simulate(
         ``skirt``, a template OBJ with UVs on the canonical body, or a GarmentCode pattern
         ``.json``.
     motion: a built-in motion (``walk``, ``kick:speed=1.2``, ``random:seed=3``), an
-        AMASS-style ``.npz`` or a BVH file, optionally ``:start=S,duration=D``.
+        AMASS-style ``.npz``, a BVH file, or SMPL fits in pickles (a ``.pkl`` or a folder of
+        them, such as a 4D-Dress take's ``SMPL/``; read without running them), optionally
+        ``:start=S,duration=D``.
     frames: output frames (default: the motion's length, blend-in and settling included).
     material: ``{"k_s": N/m, "rho": kg/m^2, "k_b": N m}``, any subset.
     betas: shape coefficients (default zeros).

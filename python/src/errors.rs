@@ -19,6 +19,7 @@ fn motion_kind(e: &motions::Error) -> Kind {
         E::File(_)
         | E::Io { .. }
         | E::Pickle { .. }
+        | E::BadPickle { .. }
         | E::NotNpz { .. }
         | E::MissingKey { .. }
         | E::BadArray { .. }
@@ -54,8 +55,8 @@ fn surrogate_kind(e: &surrogate::Error) -> Kind {
         E::Sim(s) => sim_kind(s),
         E::Dataset(d) => dataset_kind(d),
         E::Motion(m) => motion_kind(m),
-        E::Diverged { .. } => Kind::Numeric,
-        E::Sequence { source, .. } => surrogate_kind(source),
+        E::Diverged { .. } | E::NonFinitePrediction { .. } => Kind::Numeric,
+        E::Sequence { source, .. } | E::GarmentInput { source, .. } => surrogate_kind(source),
         _ => Kind::Value,
     }
 }
