@@ -501,7 +501,7 @@ fn empty_and_zero_flags_are_named() {
     let err = fails(&[
         "evaluate", "--model", "", "--data", "/no/such", "--json", out,
     ]);
-    assert!(err.contains("--model is empty"), "{err}");
+    assert!(err.contains("--model = \"\": empty"), "{err}");
     let err = fails(&["motions", "show", "random:seed=18446744073709551616"]);
     assert!(err.contains("from 0 to 18446744073709551615"), "{err}");
 }
