@@ -26,8 +26,15 @@ cleanup() {
   [ -f "$work/slurmd.pid" ] && kill "$(cat "$work/slurmd.pid")" 2>/dev/null || true
   [ -f "$work/slurmctld.pid" ] && kill "$(cat "$work/slurmctld.pid")" 2>/dev/null || true
   [ -f "$work/munged.pid" ] && kill "$(cat "$work/munged.pid")" 2>/dev/null || true
-  # The work folder goes too, unless asked to keep it for a look (KEEP_WORK=1).
-  [ "${KEEP_WORK:-0}" = 1 ] || rm -rf "$work"
+  # The work folder goes too, unless asked to keep it for a look (KEEP_WORK=1): once the
+  # daemons have exited (they write their state until then), and never failing the run.
+  if [ "${KEEP_WORK:-0}" != 1 ]; then
+    for _ in $(seq 50); do
+      pgrep -f "$work" >/dev/null 2>&1 || break
+      sleep 0.1
+    done
+    rm -rf "$work" 2>/dev/null || true
+  fi
 }
 trap cleanup EXIT
 
