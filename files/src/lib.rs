@@ -23,7 +23,7 @@ mod write;
 pub use checksum::{read_verified, sha256_file, sha256_hex};
 pub use destination::{Kind, check_destination, check_folder_destination};
 pub use lines::{read_json_lines, write_json_lines};
-pub use read::{open, open_bounded, read, read_to_string};
+pub use read::{files_with_extensions, open, open_bounded, read, read_to_string};
 pub use temporary::{Temporary, remove_temporaries, temporary_name};
 pub use write::{create_folder_of, write_atomic, write_fallible, write_json, write_with};
 

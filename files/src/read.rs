@@ -1,9 +1,23 @@
 //! Bounded reads of regular files.
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::{Error, Kind, Result};
+
+/// The entries of folder `dir` whose extension is one of `extensions` (any case), in name
+/// order: the frames of a capture, the fits of a take.
+pub fn files_with_extensions(dir: &Path, extensions: &[&str]) -> std::io::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
+        })
+        .collect();
+    files.sort();
+    Ok(files)
+}
 
 /// Opens a regular file for reading, returning it with its size: a directory, FIFO, device
 /// or socket is refused before it is opened (opening a FIFO for reading blocks until a writer

@@ -28,15 +28,10 @@ pub fn frame_files(path: &Path) -> Result<Vec<PathBuf>> {
     if !path.is_dir() {
         return Ok(vec![path.to_path_buf()]);
     }
-    let listing = std::fs::read_dir(path).map_err(|source| Error::Io {
+    let files = files::files_with_extensions(path, &["pkl"]).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    let mut files: Vec<PathBuf> = listing
-        .filter_map(|entry| entry.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("pkl")))
-        .collect();
-    files.sort();
     if files.is_empty() {
         return Err(Error::BadPickle {
             path: path.to_path_buf(),

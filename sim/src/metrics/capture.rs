@@ -154,18 +154,8 @@ pub fn capture_frames(dir: &Path) -> Result<Vec<PathBuf>> {
         path: dir.display().to_string(),
         message,
     };
-    let entries = std::fs::read_dir(dir).map_err(|e| refuse(format!("unreadable folder: {e}")))?;
-    let mut files: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension().is_some_and(|e| {
-                ["obj", "ply", "pkl"]
-                    .iter()
-                    .any(|x| e.eq_ignore_ascii_case(x))
-            })
-        })
-        .collect();
-    files.sort();
+    let files = files::files_with_extensions(dir, &["obj", "ply", "pkl"])
+        .map_err(|e| refuse(format!("unreadable folder: {e}")))?;
     if files.is_empty() {
         return Err(refuse("holds no .obj, .ply or .pkl frames".into()));
     }
