@@ -34,6 +34,27 @@ pub fn read_mesh(path: &Path) -> Result<Garment> {
     parse_ply(&bytes, &path.display().to_string(), &name)
 }
 
+/// The header's element counts, read before `ply-rs` sees them: it unwraps their parse, so a
+/// count past `u64` (found by the `ply` fuzz target) would panic inside it.
+fn check_element_counts(bytes: &[u8]) -> std::result::Result<(), String> {
+    let header = bytes
+        .split(|&b| b == b'\n')
+        .take_while(|l| !l.starts_with(b"end_header"));
+    for line in header {
+        let line = String::from_utf8_lossy(line);
+        let mut words = line.split_whitespace();
+        if words.next() == Some("element") {
+            let (name, count) = (words.next().unwrap_or(""), words.next().unwrap_or(""));
+            if count.parse::<u64>().is_err() {
+                return Err(format!(
+                    "element '{name}' has the count '{count}', not a number"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A PLY file's bytes as a garment of one panel: `vertex` x, y, z; `face` `vertex_indices`
 /// (or `vertex_index`), polygons fanned into triangles; UVs from per-corner `texcoord` lists
 /// (what [`crate::write_ply`] writes) or per-vertex `s`/`t`, `u`/`v` or `texture_u`/`texture_v`.
@@ -42,6 +63,7 @@ pub fn parse_ply(bytes: &[u8], path: &str, name: &str) -> Result<Garment> {
         path: path.to_string(),
         message,
     };
+    check_element_counts(bytes).map_err(bad)?;
     let parser = ply_rs::parser::Parser::<DefaultElement>::new();
     let mut reader = std::io::BufReader::new(bytes);
     let header = parser
@@ -364,6 +386,19 @@ pub fn subdivide(g: &mut Garment) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_element_count_past_u64_is_refused_not_a_panic() {
+        // The input the `ply` fuzz target found (2026-12-06), cut to its header.
+        let bytes = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
+                      element face 3333333333333333333333333333333333333333333333331\n\
+                      property list uchar int vertex_indices\nend_header\n0 0 0\n";
+        let e = parse_ply(bytes, "crash.ply", "crash").unwrap_err();
+        assert!(
+            matches!(&e, Error::Format { path, message } if path == "crash.ply" && message.contains("'face'")),
+            "{e}"
+        );
+    }
 
     fn tube() -> Garment {
         crate::builtin::tube_for_tests()
