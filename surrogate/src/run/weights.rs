@@ -232,10 +232,11 @@ impl TrainedModel {
 pub const MAX_WEIGHT: f32 = 1e4;
 
 /// Refuses a weights file that is not a regular file (a FIFO would block the reader, a
-/// device never end) or is larger than any model, before burn reads it.
-pub(crate) fn check_weights_file(path: &Path) -> Result<()> {
-    files::open_bounded(path, files::limits::TENSORS, "weights file")?;
-    Ok(())
+/// device never end) or is larger than any model, before burn reads it; returns its size in
+/// bytes.
+pub(crate) fn check_weights_file(path: &Path) -> Result<u64> {
+    let (_, bytes) = files::open_bounded(path, files::limits::TENSORS, "weights file")?;
+    Ok(bytes)
 }
 
 /// Refuses, before burn reads it, a `model.safetensors` that [`check_weights_file`] refuses,

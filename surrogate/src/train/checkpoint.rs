@@ -50,11 +50,26 @@ const CHECKPOINT_FILES: [&str; 3] = ["model.bpk", "optim.bpk", "ema.bpk"];
 const CHECKSUMS: &str = "checksums.json";
 
 /// Checks a checkpoint's weight files before burn reads them: regular files of a plausible
-/// size, and, where the checkpoint has `checksums.json` (every checkpoint written since it
-/// was introduced), the SHA-256 each was written with.
-fn verify_checksums(dir: &Path) -> Result<()> {
+/// size, model and EMA files large enough for the configuration's network (so a damaged
+/// file, or the checkpoint of a far smaller model, is refused before that network is
+/// allocated), and, where the checkpoint has `checksums.json` (every checkpoint written since
+/// it was introduced), the SHA-256 each was written with.
+fn verify_files(dir: &Path, config: &RunConfig) -> Result<()> {
+    let parameters = config.model.parameter_count();
     for file in CHECKPOINT_FILES {
-        crate::run::check_weights_file(&dir.join(file))?;
+        let path = dir.join(file);
+        let bytes = crate::run::check_weights_file(&path)?;
+        // Model and EMA hold every parameter as F32; AdamW's state may be empty at step 0.
+        let needed = 4 * parameters as u64;
+        if file != "optim.bpk" && bytes < needed {
+            return Err(file_error(
+                &path,
+                format!(
+                    "damaged or of another model: {bytes} bytes, and the configuration's \
+                     network of {parameters} parameters needs at least {needed}"
+                ),
+            ));
+        }
     }
     let path = dir.join(CHECKSUMS);
     if !path.exists() {
@@ -218,7 +233,7 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
     let damaged = |file: &str, e: &dyn std::fmt::Display| {
         file_error(&dir.join(file), format!("damaged or of another model: {e}"))
     };
-    verify_checksums(&dir)?;
+    verify_files(&dir, config)?;
     let model = Dit::new(&config.model, device)
         .try_load_file(dir.join("model.bpk"))
         .map_err(|e| damaged("model.bpk", &e))?;
@@ -241,4 +256,45 @@ pub fn load(run: &Path, config: &RunConfig, device: &Device) -> Result<Option<Lo
         ema,
         state,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checkpoint whose weight files are far smaller than its configuration's network
+    /// (damaged, or of another model) is refused by name before that network is built; under
+    /// its own configuration it loads.
+    #[test]
+    fn weights_too_small_for_the_configuration_are_refused_before_building() {
+        let run = tempfile::tempdir().unwrap();
+        let device = Device::flex().autodiff();
+        let small = RunConfig {
+            model: crate::model::tests::tiny(),
+            ..RunConfig::default()
+        };
+        let model = Dit::new(&small.model, &device);
+        let ema = Dit::new(&small.model, &device.clone().inner());
+        let optim = optimizer(&small.training);
+        let state = RunState {
+            step: 10,
+            wall_s: 1.0,
+            best_val_loss: None,
+        };
+        let mut large = small.clone();
+        large.model.width = 2048;
+        save(run.path(), &large, &model, &optim, &ema, &state).unwrap();
+        let Err(err) = load(run.path(), &large, &device) else {
+            panic!("a checkpoint of 16-wide weights loaded as a 2048-wide network");
+        };
+        let message = err.to_string();
+        assert!(
+            message.contains("model.bpk") && message.contains("needs at least"),
+            "{message}"
+        );
+
+        save(run.path(), &small, &model, &optim, &ema, &state).unwrap();
+        let loaded = load(run.path(), &small, &device).unwrap().unwrap();
+        assert_eq!(loaded.state, state);
+    }
 }
