@@ -154,8 +154,8 @@ impl Recording {
             material.set_item("k_b", m.material.bending)?;
         }
         let json_of = |value: serde_json::Value| to_python(py, &value);
-        let config = match meta.and_then(|m| m.config.as_ref()) {
-            Some(c) => Some(json_of(serde_json::to_value(c).map_err(value)?)?),
+        let config = match meta.and_then(|m| m.scene_config()) {
+            Some(c) => Some(json_of(serde_json::to_value(&c).map_err(value)?)?),
             None => None,
         };
         let meta_dict = match &parsed.meta_json {

@@ -18,7 +18,7 @@ pub use writer::{Channels, FrameRecord, SequenceWriter};
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::SceneConfig;
+use crate::config::{RecordConfig, SceneConfig};
 use crate::params::{Material, SolverParams};
 
 /// Topic of the sequence metadata (JSON, once at time 0).
@@ -80,11 +80,66 @@ pub struct SequenceMeta {
     pub solver: SolverParams,
     /// Units and axes.
     pub units: String,
-    /// The resolved scene configuration the sequence was simulated from (absent in
-    /// recordings made before configurations existed, and in predicted sequences that no
-    /// configuration reproduces); `simulate --config-from` runs it again.
+    /// What the resolved scene configuration the sequence was simulated from adds to the
+    /// fields above (absent in recordings made before configurations existed, and in
+    /// predicted sequences that no configuration reproduces); [`SequenceMeta::scene_config`]
+    /// puts the whole configuration together, and `simulate --config-from` runs it again.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub config: Option<SceneConfig>,
+    pub config: Option<RecordedScene>,
+}
+
+/// The keys of a scene configuration that [`SequenceMeta`] does not already hold: each value
+/// is stored once per recording. Recordings made before this split carry the whole
+/// configuration here; its other keys equal the metadata's and are not read.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecordedScene {
+    /// The garment as configured (a library name, built-in or file).
+    pub garment: String,
+    /// The motion as configured.
+    pub motion: String,
+    /// The body model file, when one was given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// Frames as configured (the whole motion when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<usize>,
+    /// What the recording carries besides the garment.
+    pub record: RecordConfig,
+}
+
+impl RecordedScene {
+    /// What `config` adds to the metadata of its sequence.
+    pub fn of(config: &SceneConfig) -> Self {
+        Self {
+            garment: config.garment.clone(),
+            motion: config.motion.clone(),
+            model: config.model.clone(),
+            frames: config.frames,
+            record: config.record,
+        }
+    }
+}
+
+impl SequenceMeta {
+    /// The whole scene configuration the sequence was simulated from, or `None` for a
+    /// recording without one.
+    pub fn scene_config(&self) -> Option<SceneConfig> {
+        let scene = self.config.as_ref()?;
+        Some(SceneConfig {
+            garment: scene.garment.clone(),
+            motion: scene.motion.clone(),
+            model: scene.model.clone(),
+            betas: self.betas.clone(),
+            friction: self.friction,
+            frames: scene.frames,
+            blend_frames: self.blend_frames,
+            settle_frames: self.settle_frames,
+            seed: self.seed,
+            material: self.material,
+            solver: self.solver,
+            record: scene.record,
+        })
+    }
 }
 
 /// What a body-only sequence (`motions export`) is.
@@ -149,4 +204,83 @@ pub struct PoseRecord {
     /// Body shape of this frame (ramped during the blend-in).
     #[serde(default)]
     pub betas: Vec<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A configuration unlike the default in every key the metadata holds.
+    fn config() -> SceneConfig {
+        let mut c = SceneConfig {
+            garment: "skirt".into(),
+            motion: "walk:speed=1.2".into(),
+            betas: vec![0.5, -0.25, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            friction: 0.45,
+            frames: Some(40),
+            blend_frames: 7,
+            settle_frames: 3,
+            seed: Some(99),
+            ..SceneConfig::default()
+        };
+        c.material.stretch = 80.0;
+        c.solver.substeps = 2;
+        c.record.body_vertices = true;
+        c
+    }
+
+    fn meta(c: &SceneConfig, recorded: Option<serde_json::Value>) -> serde_json::Value {
+        let meta = SequenceMeta {
+            software: "test".into(),
+            garment: c.garment.clone(),
+            motion: c.motion.clone(),
+            body_model: "smpl".into(),
+            betas: c.betas.clone(),
+            fps: 30.0,
+            frames: 40,
+            blend_frames: c.blend_frames,
+            settle_frames: c.settle_frames,
+            material: c.material,
+            friction: c.friction,
+            seed: c.seed,
+            solver: c.solver,
+            units: UNITS.into(),
+            config: Some(RecordedScene::of(c)),
+        };
+        let mut json = serde_json::to_value(meta).unwrap();
+        if let Some(value) = recorded {
+            json["config"] = value;
+        }
+        json
+    }
+
+    #[test]
+    fn each_scene_value_is_stored_once_and_the_whole_configuration_comes_back() {
+        let c = config();
+        let json = meta(&c, None);
+        let recorded = json["config"].as_object().unwrap();
+        for key in [
+            "material",
+            "solver",
+            "friction",
+            "betas",
+            "seed",
+            "blend_frames",
+        ] {
+            assert!(
+                json.get(key).is_some() && !recorded.contains_key(key),
+                "{key}"
+            );
+        }
+        let read: SequenceMeta = serde_json::from_value(json).unwrap();
+        assert_eq!(read.scene_config(), Some(c));
+    }
+
+    #[test]
+    fn a_recording_with_the_whole_configuration_reads_as_before() {
+        let c = config();
+        let json = meta(&c, Some(serde_json::to_value(&c).unwrap()));
+        let read: SequenceMeta = serde_json::from_value(json).unwrap();
+        assert_eq!(read.scene_config(), Some(c));
+    }
 }

@@ -53,7 +53,7 @@ impl Recording {
         let meta = Self::read(path)?
             .meta
             .ok_or_else(|| fail("the recording has no metadata"))?;
-        meta.config.ok_or_else(|| {
+        meta.scene_config().ok_or_else(|| {
             fail(
                 "the recording carries no scene configuration (made by an older version, or a \
                  predicted sequence); pass the scene's flags or a --config file instead",

@@ -19,7 +19,7 @@ use crate::config::ValidSceneConfig;
 use crate::error::{Error, Result};
 use crate::obstacles::{AnimatedMesh, Obstacles};
 use crate::params::{Material, SolverParams};
-use crate::recording::{FrameRecord, FrameStats, SequenceMeta, UNITS};
+use crate::recording::{FrameRecord, FrameStats, RecordedScene, SequenceMeta, UNITS};
 use crate::solver::{ClothSetup, FrameReport, Solver, StageTimes};
 use simulation::Simulation;
 
@@ -340,7 +340,7 @@ impl Scene {
             seed: self.config.seed,
             solver: self.config.solver,
             units: UNITS.into(),
-            config: Some((*self.config).clone()),
+            config: Some(RecordedScene::of(&self.config)),
         }
     }
 
