@@ -42,20 +42,61 @@ fn main() -> ExitCode {
 }
 
 /// The error and its causes on one line (scripts read the first line of standard error),
-/// each cause once: a cause whose text its context already quotes is not repeated.
+/// each cause once. The program's contexts are printed down to the first error of the
+/// workspace's crates, where the line ends: each of those quotes its own cause in its message
+/// (docs/ARCHITECTURE.md, "Errors"), so the causes under it are already on the line.
 fn one_line(err: &anyhow::Error) -> String {
-    let mut line = err.to_string();
-    for cause in err.chain().skip(1) {
-        let cause = cause.to_string();
-        if !line.contains(&cause) {
-            line.push_str(": ");
-            line.push_str(&cause);
+    let mut parts = Vec::new();
+    for cause in err.chain() {
+        parts.push(cause.to_string());
+        if is_workspace_error(cause) {
+            break;
         }
     }
+    let line = parts.join(": ");
     // A multi-line message (a TOML parse error shows the line) joined with "; ".
     line.lines()
         .map(str::trim_end)
         .filter(|l| !l.trim().is_empty())
         .collect::<Vec<_>>()
         .join("; ")
+}
+
+/// Whether `err` is one of the workspace's error types, whose messages quote their causes.
+fn is_workspace_error(err: &(dyn std::error::Error + 'static)) -> bool {
+    err.is::<files::Error>()
+        || err.is::<motions::Error>()
+        || err.is::<garments::Error>()
+        || err.is::<sim::Error>()
+        || err.is::<dataset::Error>()
+        || err.is::<regress::Error>()
+        || err.is::<render::Error>()
+        || err.is::<surrogate::Error>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use anyhow::Context;
+
+    /// A file error under two contexts: each context once, the file's cause (quoted by the
+    /// file error's message and also its `source`) once.
+    #[test]
+    fn each_cause_is_printed_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let file = files::Error::Io {
+            path: "a/b.obj".into(),
+            source: io,
+        };
+        let err = Err::<(), _>(sim::Error::from(file))
+            .context("importing a/b.obj")
+            .context("making the template")
+            .unwrap_err();
+        assert_eq!(
+            one_line(&err),
+            "making the template: importing a/b.obj: a/b.obj: no such file"
+        );
+        let plain = anyhow::anyhow!("first line  \n\nsecond line\n");
+        assert_eq!(one_line(&plain), "first line; second line");
+    }
 }
