@@ -35,7 +35,7 @@ fn the_default_scene_gives_the_same_bytes_across_processes_and_thread_counts() {
         recordings.push((threads, out));
     }
     let first = Recording::read(&recordings[0].1).unwrap();
-    let config = first.meta.as_ref().unwrap().config.as_ref().unwrap();
+    let config = first.meta.as_ref().unwrap().scene_config().unwrap();
     assert!(
         config.solver.self_contact,
         "the default scene has self-contact on"

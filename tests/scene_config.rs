@@ -75,7 +75,7 @@ fn print_config_config_and_config_from_reproduce_the_flag_run_bit_for_bit() {
         "--config-from made different bytes"
     );
     let recording = sim::recording::Recording::read(&again).unwrap();
-    let carried = recording.meta.unwrap().config.unwrap();
+    let carried = recording.meta.unwrap().scene_config().unwrap();
     assert_eq!(carried.to_toml(), toml);
     assert_eq!(recording.garment.len(), 6);
 

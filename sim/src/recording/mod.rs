@@ -97,6 +97,9 @@ pub struct RecordedScene {
     pub garment: String,
     /// The motion as configured.
     pub motion: String,
+    /// The shape as configured (the metadata's `betas` are completed to the body model's
+    /// count).
+    pub betas: Vec<f64>,
     /// The body model file, when one was given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model: Option<String>,
@@ -113,6 +116,7 @@ impl RecordedScene {
         Self {
             garment: config.garment.clone(),
             motion: config.motion.clone(),
+            betas: config.betas.clone(),
             model: config.model.clone(),
             frames: config.frames,
             record: config.record,
@@ -129,7 +133,7 @@ impl SequenceMeta {
             garment: scene.garment.clone(),
             motion: scene.motion.clone(),
             model: scene.model.clone(),
-            betas: self.betas.clone(),
+            betas: scene.betas.clone(),
             friction: self.friction,
             frames: scene.frames,
             blend_frames: self.blend_frames,
@@ -215,7 +219,7 @@ mod tests {
         let mut c = SceneConfig {
             garment: "skirt".into(),
             motion: "walk:speed=1.2".into(),
-            betas: vec![0.5, -0.25, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            betas: vec![0.5, -0.25],
             friction: 0.45,
             frames: Some(40),
             blend_frames: 7,
@@ -235,7 +239,7 @@ mod tests {
             garment: c.garment.clone(),
             motion: c.motion.clone(),
             body_model: "smpl".into(),
-            betas: c.betas.clone(),
+            betas: [c.betas.as_slice(), &[0.0; 8]].concat(),
             fps: 30.0,
             frames: 40,
             blend_frames: c.blend_frames,
@@ -259,14 +263,7 @@ mod tests {
         let c = config();
         let json = meta(&c, None);
         let recorded = json["config"].as_object().unwrap();
-        for key in [
-            "material",
-            "solver",
-            "friction",
-            "betas",
-            "seed",
-            "blend_frames",
-        ] {
+        for key in ["material", "solver", "friction", "seed", "blend_frames"] {
             assert!(
                 json.get(key).is_some() && !recorded.contains_key(key),
                 "{key}"
