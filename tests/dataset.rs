@@ -12,7 +12,8 @@ use std::time::{Duration, Instant};
 use common::{binary, fails, ok, run_with};
 use serde_json::Value;
 
-/// Eight 10-frame skirt sequences: quick, and long enough to be killed mid-way.
+/// Eight 10-frame skirt sequences on a light solver: quick (about 0.15 s each), and long
+/// enough to be killed mid-way.
 const SMALL_SPEC: &str = r#"
 name = "small"
 seed = 5
@@ -22,6 +23,9 @@ blend_frames = 3
 settle_frames = 1
 shapes_per_motion = 2
 draws_per_shape = 2
+[solver]
+substeps = 1
+max_iterations = 6
 [[garments]]
 name = "skirt"
 split = "train"

@@ -52,23 +52,17 @@ fn cmu_01_01_shows_poses_an_upright_body_and_exports_as_amass() {
     a_stretch_exported_as_amass_reads_back_the_same(clip, dir.path());
 }
 
-/// An upright person at every tenth frame of the clip, the last included; a frame past the end
-/// is refused.
+/// An upright person at every tenth frame of the clip, the last included: posed here the way
+/// `body --motion --frame` poses it (the last frame through the command too, which must agree);
+/// a frame past the end is refused.
 fn an_upright_body_at_every_tenth_frame(clip: &str, dir: &Path) {
+    let model = sim::sources::body_model(None).unwrap();
+    let shaped = model.shape(&[]).unwrap();
+    let motion = sim::sources::motion(clip, &model, &shaped).unwrap();
+    assert_eq!(motion.len(), 688);
     for frame in (0..688).step_by(10).chain([687]) {
-        let out = dir.join(format!("body_{frame}.json"));
-        let k = frame.to_string();
-        ok(&[
-            "body",
-            "--motion",
-            clip,
-            "--frame",
-            &k,
-            "--json",
-            out.to_str().unwrap(),
-        ]);
-        let b = json(&out);
-        let y = |j: usize| b["joints"][j][1].as_f64().unwrap();
+        let posed = model.pose(&shaped, &motion.frames[frame]).unwrap();
+        let y = |j: usize| posed.joints[j][1];
         let feet = [7, 8, 10, 11]
             .map(y)
             .into_iter()
@@ -79,9 +73,32 @@ fn an_upright_body_at_every_tenth_frame(clip: &str, dir: &Path) {
             y(15),
             y(0)
         );
-        let height = b["posed_height_m"].as_f64().unwrap();
+        let height = posed.height();
         assert!((1.2..=2.1).contains(&height), "frame {frame}: {height} m");
     }
+
+    let out = dir.join("body_687.json");
+    ok(&[
+        "body",
+        "--motion",
+        clip,
+        "--frame",
+        "687",
+        "--json",
+        out.to_str().unwrap(),
+    ]);
+    let b = json(&out);
+    let posed = model.pose(&shaped, &motion.frames[687]).unwrap();
+    for (j, joint) in posed.joints.iter().enumerate() {
+        for (k, value) in joint.iter().enumerate() {
+            let written = b["joints"][j][k].as_f64().unwrap();
+            assert!(
+                (written - value).abs() < 1e-9,
+                "joint {j}[{k}]: {written} vs {value}"
+            );
+        }
+    }
+    assert!((b["posed_height_m"].as_f64().unwrap() - posed.height()).abs() < 1e-9);
     let past = common::fails(&[
         "body", "--motion", clip, "--frame", "688", "--json", "x.json",
     ]);

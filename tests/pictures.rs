@@ -252,32 +252,36 @@ fn chromium() -> Option<PathBuf> {
 fn browse(browser: &Path, page: &Path, work: &Path) -> (image::RgbImage, String) {
     let url = format!("file://{}#frame=9", page.display());
     let shot = work.join("shot.png");
-    let common = |extra: &[String]| {
-        let mut args = vec![
-            "120".to_string(),
-            browser.display().to_string(),
-            "--headless".into(),
-            "--no-sandbox".into(),
-            "--use-angle=swiftshader".into(),
-            "--enable-unsafe-swiftshader".into(),
-            format!("--user-data-dir={}", work.join("profile").display()),
-            "--window-size=900,600".into(),
-            "--virtual-time-budget=20000".into(),
-        ];
-        args.extend_from_slice(extra);
-        args.push(url.clone());
-        Command::new("timeout").args(args).output().unwrap()
-    };
-    let out = common(&[format!("--screenshot={}", shot.display())]);
+    let _ = std::fs::remove_file(&shot);
+    // One launch takes the screenshot and prints the page's DOM after its scripts ran.
+    let out = Command::new("timeout")
+        .arg("120")
+        .arg(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--window-size=900,600",
+            "--virtual-time-budget=20000",
+            "--dump-dom",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            work.join("profile").display()
+        ))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(url)
+        .output()
+        .unwrap();
     assert!(
         shot.exists(),
         "no screenshot: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let dom = common(&["--dump-dom".into()]);
     (
         image::open(&shot).unwrap().to_rgb8(),
-        String::from_utf8_lossy(&dom.stdout).to_string(),
+        String::from_utf8_lossy(&out.stdout).to_string(),
     )
 }
 

@@ -184,7 +184,6 @@ fn rotations<R: std::io::Read + std::io::Seek>(npz: &mut Npz<R>) -> Result<(usiz
 /// in that layout and are left out), `trans` (N x 3), `betas` (16), `gender` (`neutral`) and
 /// `mocap_framerate`. [`load`] with the same `pelvis_rest` reads it back to the same frames.
 pub fn write(path: &Path, motion: &Motion, pelvis_rest: [f64; 3], betas: &[f64]) -> Result<()> {
-    use npyz::WriterBuilder;
     let y_up_to_z_up =
         UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
     let j0 = Vector3::from(pelvis_rest);
@@ -213,19 +212,9 @@ pub fn write(path: &Path, motion: &Motion, pelvis_rest: [f64; 3], betas: &[f64])
     files::write_with(path, |w| {
         let mut npz = npyz::npz::NpzWriter::new(w);
         for (name, shape, data) in arrays {
-            npz.array::<f64>(name, Default::default())?
-                .default_dtype()
-                .shape(shape)
-                .begin_nd()?
-                .extend(data.iter().copied())?;
+            crate::npz::write_array(&mut npz, name, shape, data)?;
         }
-        npz.array::<str>("gender", Default::default())?
-            .dtype(npyz::DType::Plain(
-                "<U7".parse().map_err(std::io::Error::other)?,
-            ))
-            .shape(&[])
-            .begin_nd()?
-            .push("neutral")?;
+        crate::npz::write_text(&mut npz, "gender", "neutral")?;
         npz.zip_writer().finish().map_err(std::io::Error::other)?;
         Ok(())
     })?;

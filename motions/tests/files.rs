@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use motions::npz::Npz;
+use motions::npz::{Npz, write_array, write_text};
 use motions::{BodyModel, Error};
 use npyz::WriterBuilder;
 use npyz::npz::NpzWriter;
@@ -16,44 +16,16 @@ enum Value<'a> {
 
 fn write_npz(path: &Path, arrays: &[(&str, Value)]) {
     let mut npz = NpzWriter::create(path).unwrap();
+    let dims = |shape: &[usize]| shape.iter().map(|&s| s as u64).collect::<Vec<u64>>();
     for (name, value) in arrays {
         match value {
-            Value::F64(shape, data) => {
-                let shape: Vec<u64> = shape.iter().map(|&s| s as u64).collect();
-                npz.array::<f64>(name, Default::default())
-                    .unwrap()
-                    .default_dtype()
-                    .shape(&shape)
-                    .begin_nd()
-                    .unwrap()
-                    .extend(data.iter().copied())
-                    .unwrap();
-            }
-            Value::F32(shape, data) => {
-                let shape: Vec<u64> = shape.iter().map(|&s| s as u64).collect();
-                npz.array::<f32>(name, Default::default())
-                    .unwrap()
-                    .default_dtype()
-                    .shape(&shape)
-                    .begin_nd()
-                    .unwrap()
-                    .extend(data.iter().copied())
-                    .unwrap();
-            }
-            Value::Text(text) => {
-                let dtype =
-                    npyz::DType::Plain(format!("<U{}", text.chars().count()).parse().unwrap());
-                npz.array::<str>(name, Default::default())
-                    .unwrap()
-                    .dtype(dtype)
-                    .shape(&[])
-                    .begin_nd()
-                    .unwrap()
-                    .push(*text)
-                    .unwrap();
-            }
+            Value::F64(shape, data) => write_array(&mut npz, name, &dims(shape), data),
+            Value::F32(shape, data) => write_array(&mut npz, name, &dims(shape), data),
+            Value::Text(text) => write_text(&mut npz, name, text),
         }
+        .unwrap();
     }
+    npz.zip_writer().finish().unwrap();
 }
 
 fn amass_file(path: &Path, frames: usize, fps: f64, rate_key: &str) -> Vec<f64> {
