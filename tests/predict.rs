@@ -317,6 +317,7 @@ fn evaluate_ranks_the_baselines_per_family_and_motion() {
     }
     let garment = j["sequences"][0]["garment"].as_str().unwrap();
     let family = j["family_of_garment"][garment].as_str().unwrap();
+    assert_eq!(family, "dress_or_skirt");
     assert!(j["families"]["test_motion"][family].is_object(), "{family}");
     let simulation = &j["simulation"]["test_motion"];
     for key in [

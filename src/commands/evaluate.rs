@@ -10,8 +10,9 @@ use dataset::{DatasetDir, ManifestRecord};
 use serde_json::{Value, json};
 use surrogate::burn::prelude::Device;
 use surrogate::evaluate::baselines::{Baseline, FloorMaps};
+use surrogate::evaluate::family::fill_families;
 use surrogate::evaluate::tables::{
-    SequenceResult, SplitRows, aggregate, aggregate_by, family_of, grouped_text_table, text_table,
+    SequenceResult, SplitRows, aggregate, aggregate_by, grouped_text_table, text_table,
 };
 use surrogate::evaluate::{Evaluation, describe_model, document, fingerprint, select};
 use surrogate::predict::{Predictor, Settings};
@@ -87,8 +88,9 @@ pub fn run(args: &EvaluateArgs) -> Result<()> {
         bar.set_message(id.to_string());
         bar.inc(1);
     };
-    let (results, reused) = evaluation.all(&records, cache.as_deref(), &done)?;
+    let (mut results, reused) = evaluation.all(&records, cache.as_deref(), &done)?;
     bar.finish_and_clear();
+    fill_families(&mut results, &args.data, &body)?;
     let asked =
         json!({"splits": args.splits, "max_sequences": args.max_sequences, "data": args.data});
     let rows = aggregate(&results);
@@ -137,10 +139,7 @@ fn print_tables(
     );
     say_part!("{}", text_table(splits));
     for (label, groups) in [
-        (
-            "family",
-            aggregate_by(results, |r| family_of(&r.garment).to_string()),
-        ),
+        ("family", aggregate_by(results, |r| r.family.clone())),
         ("motion", aggregate_by(results, |r| r.motion.clone())),
     ] {
         if groups.values().any(|g| g.len() > 1) {

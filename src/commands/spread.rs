@@ -18,8 +18,9 @@ use sim::SceneConfig;
 use sim::recording::Recording;
 use sim::run::Prepared;
 use surrogate::data::Sequence;
+use surrogate::evaluate::family::fill_families;
 use surrogate::evaluate::tables::{
-    SequenceResult, aggregate, aggregate_by, family_of, grouped_text_table, text_table,
+    SequenceResult, aggregate, aggregate_by, grouped_text_table, text_table,
 };
 use surrogate::evaluate::{Method, Truth};
 
@@ -96,6 +97,7 @@ fn rerun(
         id: record.sequence.id.clone(),
         split: record.sequence.split.to_string(),
         garment: record.sequence.garment.clone(),
+        family: String::new(),
         motion: record.sequence.motion.clone(),
         file: file.to_string(),
         settings: json!({"perturb": format!("{perturbation:?}")}),
@@ -136,7 +138,7 @@ pub fn spread(
         "(eta {eta}) {msg}",
         quiet,
     );
-    let results = chosen
+    let mut results = chosen
         .par_iter()
         .map(|r| {
             let result = rerun(dir, r, perturbation)
@@ -146,8 +148,11 @@ pub fn spread(
         })
         .collect::<Result<Vec<_>>>()?;
     bar.finish_and_clear();
+    // Families from the templates as worn on the default body (a body model of the user's
+    // shifts a template's distances from the body by millimetres, not its family).
+    fill_families(&mut results, dir, &sim::sources::body_model(None)?)?;
     let (splits_rows, _) = aggregate(&results);
-    let families = aggregate_by(&results, |r| family_of(&r.garment).to_string());
+    let families = aggregate_by(&results, |r| r.family.clone());
     let motions = aggregate_by(&results, |r| r.motion.clone());
     if let Some(path) = json_path {
         write_json(

@@ -27,7 +27,34 @@ const LOOSE_HEM_CM: f64 = 31.0;
 /// Armhole drop (cm) from which a top is loose (dropped shoulders).
 const LOOSE_DROP_CM: f64 = 3.0;
 
+/// Hem height above the feet, as a fraction of the body's height, below which a garment that is
+/// not a library design is a dress or skirt: the library's [`DRESS_HEM_CM`] on our default body
+/// (its templates' hems sit at 0.0062 of the body's height per cm of the design's hem height;
+/// measured tunics 0.45-0.47, dresses 0.19-0.39).
+const DRESS_HEM_FRACTION: f64 = 0.43;
+/// Ease (see [`Family::of_fit`]) from which a top that is not a library design is loose, m:
+/// midway between the library's fitted tops (at most 4.75 cm, `boatneck_top`) and its loose
+/// ones (at least 5.46 cm, `camisole_long`), measured on their templates.
+const LOOSE_EASE_M: f64 = 0.051;
+
 impl Family {
+    /// The family of a garment that is not a library design (a pattern file, an imported
+    /// mesh), from how its template is worn on the canonical body, by the library's own rule
+    /// made geometric: a hem below [`DRESS_HEM_FRACTION`] of the body's height above the feet
+    /// makes a dress or skirt; otherwise an `ease_m` (the mean of the 75th and 90th
+    /// percentiles of its vertices' distances from the body's surface, m) of at least
+    /// [`LOOSE_EASE_M`] a loose top. Every library design's template gets its design's family
+    /// this way (`surrogate`'s `every_library_template_is_worn_as_its_design_s_family`).
+    pub fn of_fit(hem_height_fraction: f64, ease_m: f64) -> Family {
+        if hem_height_fraction < DRESS_HEM_FRACTION {
+            Family::DressOrSkirt
+        } else if ease_m >= LOOSE_EASE_M {
+            Family::LooseTop
+        } else {
+            Family::FittedTop
+        }
+    }
+
     /// The name used in reports (`fitted_top`, `loose_top`, `dress_or_skirt`).
     pub fn name(self) -> &'static str {
         match self {
@@ -87,5 +114,14 @@ mod tests {
             c
         });
         assert_eq!(counts, [9, 6, 4], "fitted, loose, dress");
+    }
+
+    #[test]
+    fn a_worn_garment_is_a_dress_by_its_hem_and_loose_by_its_ease() {
+        assert_eq!(Family::of_fit(0.30, 0.02), Family::DressOrSkirt);
+        assert_eq!(Family::of_fit(0.30, 0.09), Family::DressOrSkirt);
+        assert_eq!(Family::of_fit(0.58, 0.03), Family::FittedTop);
+        assert_eq!(Family::of_fit(0.58, 0.06), Family::LooseTop);
+        assert_eq!(Family::of_fit(0.45, 0.06), Family::LooseTop);
     }
 }

@@ -9,6 +9,7 @@
 //! jitter over all motion frames.
 
 pub mod baselines;
+pub mod family;
 mod protocol;
 pub mod report;
 pub mod tables;

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use serde_json::{Value, json};
 
 use super::baselines::{self, Baseline, FloorMaps};
-use super::tables::{Rows, SequenceResult, aggregate_by, family_of, paper_numbers};
+use super::tables::{Rows, SequenceResult, aggregate_by, paper_numbers};
 use super::{Method, Truth};
 use crate::data::Sequence;
 use crate::error::{Error, Result, bad_value, file_error};
@@ -160,11 +160,11 @@ pub fn document(
     ] {
         settings[key] = value;
     }
-    let families = aggregate_by(results, |r| family_of(&r.garment).to_string());
+    let families = aggregate_by(results, |r| r.family.clone());
     let motions = aggregate_by(results, |r| r.motion.clone());
     let family_of_garment: BTreeMap<&str, &str> = results
         .iter()
-        .map(|r| (r.garment.as_str(), family_of(&r.garment)))
+        .map(|r| (r.garment.as_str(), r.family.as_str()))
         .collect();
     json!({
         "splits": splits, "families": families, "motions": motions,
@@ -275,6 +275,7 @@ impl Evaluation<'_> {
             id: record.sequence.id.clone(),
             split: record.sequence.split.to_string(),
             garment: record.sequence.garment.clone(),
+            family: String::new(),
             motion: record.sequence.motion.clone(),
             file: file.to_string(),
             settings: self.settings_of(record),

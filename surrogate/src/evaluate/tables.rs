@@ -4,7 +4,6 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use garments::library::Family;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 
@@ -19,6 +18,10 @@ pub struct SequenceResult {
     pub split: String,
     /// Its garment.
     pub garment: String,
+    /// Its garment's family (`fitted_top`, `loose_top`, `dress_or_skirt`), set for every
+    /// result, cached ones included, by [`super::family::fill_families`].
+    #[serde(default)]
+    pub family: String,
     /// Its motion.
     pub motion: String,
     /// Its recording, relative to the dataset folder.
@@ -77,12 +80,6 @@ pub fn grouped_text_table(label: &str, groups: &GroupRows) -> String {
 
 /// Per split, then per group (a family or a motion): the mean row of every method.
 pub type GroupRows = BTreeMap<String, SplitRows>;
-
-/// The family of a sequence's garment, decided from its design
-/// ([`garments::library::Family`]); `other` for template files and patterns.
-pub fn family_of(garment: &str) -> &'static str {
-    Family::of_garment(garment).map_or("other", Family::name)
-}
 
 /// The mean rows of every method per split and per group of `key` within it.
 pub fn aggregate_by(
@@ -372,6 +369,7 @@ mod tests {
             id: format!("{split}-{lbs_e_v}"),
             split: split.into(),
             garment: "skirt".into(),
+            family: "dress_or_skirt".into(),
             motion: "walk".into(),
             file: "sequences/x.mcap".into(),
             settings: json!({}),
