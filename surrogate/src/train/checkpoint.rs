@@ -46,6 +46,8 @@ pub fn optimizer(training: &TrainConfig) -> ModuleOptimizer {
 
 /// The weight files of a checkpoint.
 const CHECKPOINT_FILES: [&str; 3] = ["model.bpk", "optim.bpk", "ema.bpk"];
+/// The files of [`CHECKPOINT_FILES`] that hold the whole network (AdamW's state may be empty).
+const NETWORK_FILES: [&str; 2] = ["model.bpk", "ema.bpk"];
 /// The SHA-256 of each, written with them (`{"model.bpk": "<hex>", ...}`).
 const CHECKSUMS: &str = "checksums.json";
 
@@ -55,13 +57,13 @@ const CHECKSUMS: &str = "checksums.json";
 /// allocated), and, where the checkpoint has `checksums.json` (every checkpoint written since
 /// it was introduced), the SHA-256 each was written with.
 fn verify_files(dir: &Path, config: &RunConfig) -> Result<()> {
+    // The network's weights, every parameter as F32; AdamW's state may be empty at step 0.
     let parameters = config.model.parameter_count();
+    let needed = 4 * parameters as u64;
     for file in CHECKPOINT_FILES {
         let path = dir.join(file);
         let bytes = crate::run::check_weights_file(&path)?;
-        // Model and EMA hold every parameter as F32; AdamW's state may be empty at step 0.
-        let needed = 4 * parameters as u64;
-        if file != "optim.bpk" && bytes < needed {
+        if NETWORK_FILES.contains(&file) && bytes < needed {
             return Err(file_error(
                 &path,
                 format!(
