@@ -159,6 +159,10 @@ fn malformed_patterns_are_refused_with_the_reason() {
         },
         "right_wrong",
     );
+}
+
+#[test]
+fn malformed_edges_are_refused_with_the_reason() {
     refused(
         |v| v["pattern"]["panels"]["front"]["edges"][0]["endpoints"] = json!([0, 7]),
         "endpoints [0, 7]",
