@@ -163,6 +163,23 @@ fn a_worn_frame_without_uvs_comes_back_as_the_designs_template() {
         "UVs of its own"
     );
     assert!(garments::uv_overlap(&back) < 0.02);
+    // Cut as a tank's pattern is: a front and a back, and no sleeves.
+    assert!(r["charts"].as_u64().unwrap() >= 2, "{r}");
+    let used: std::collections::BTreeSet<&str> = back
+        .triangle_panels
+        .iter()
+        .map(|&p| back.panels[p as usize].as_str())
+        .collect();
+    assert!(
+        used.contains("torso_front") && used.contains("torso_back"),
+        "{used:?}"
+    );
+    let torso = back
+        .triangle_panels
+        .iter()
+        .filter(|&&p| back.panels[p as usize].starts_with("torso"))
+        .count();
+    assert!(torso * 10 > back.triangles.len() * 9, "{used:?}");
     let (template, worn_frame) = (positions(&w.template), positions(&w.plain));
     let before = chamfer_cm(&worn_frame, &template);
     let after = chamfer_cm(&back.positions, &template);

@@ -1,11 +1,8 @@
 //! Meshes users bring (a scan, an artist's garment, a frame of a capture): OBJ or PLY read
-//! alike, coincident vertices welded, UV charts checked for overlap and, where a mesh has no
-//! usable UVs, new ones unwrapped.
+//! alike, coincident vertices welded, UV charts checked for overlap (a mesh without usable UVs
+//! gets new ones from [`crate::unwrap`]).
 //!
-//! PLY is read by `ply-rs` (ASCII and both binary layouts); UVs are unwrapped by `uvunwrap`
-//! (pure Rust, in the manner of xatlas: charts grown within a normal cone, flattened by least
-//! squares conformal maps, packed into one page), chosen over xatlas's C++ bindings so that
-//! nothing needs a C++ toolchain.
+//! PLY is read by `ply-rs` (ASCII and both binary layouts).
 
 use std::path::Path;
 
@@ -283,44 +280,6 @@ pub fn uv_overlap(g: &Garment) -> f64 {
     }
 }
 
-fn unwrap_error(g: &Garment, problem: String) -> Error {
-    Error::Unwrap {
-        garment: g.name.clone(),
-        problem,
-    }
-}
-
-/// New UVs for the whole mesh, one page in [0, 1], per corner; every triangle one panel's.
-/// Charts are cut by the unwrapper, so the garment's panels are kept as labels of triangles.
-pub fn unwrap_uvs(g: &mut Garment) -> Result<()> {
-    let indices: Vec<u32> = g.triangles.iter().flatten().copied().collect();
-    let positions: Vec<[f32; 3]> = g.positions.iter().map(|p| p.map(|c| c as f32)).collect();
-    let mesh = uvunwrap::MeshInput::new(&positions, &indices);
-    let atlas = uvunwrap::generate(&[mesh], &uvunwrap::Options::default())
-        .map_err(|e| unwrap_error(g, e.to_string()))?;
-    let out = atlas
-        .meshes
-        .first()
-        .ok_or_else(|| unwrap_error(g, "the unwrapper returned no mesh".into()))?;
-    if out.indices.len() != indices.len() || out.vertices.iter().any(|v| v.page.unwrap_or(0) != 0) {
-        return Err(unwrap_error(
-            g,
-            "the unwrapper did not give one UV page for every triangle".into(),
-        ));
-    }
-    g.uvs = out
-        .vertices
-        .iter()
-        .map(|v| [f64::from(v.uv[0]), f64::from(v.uv[1])])
-        .collect();
-    g.uv_triangles = out
-        .indices
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
-    Ok(())
-}
-
 /// The median edge length, m (0 for a mesh without triangles).
 pub fn median_edge_length(g: &Garment) -> f64 {
     let mut lengths: Vec<f64> = g
@@ -488,22 +447,5 @@ mod tests {
             corners(&tube()),
             "the same triangles, renumbered"
         );
-    }
-
-    #[test]
-    fn overlapping_charts_are_measured_and_unwrapping_removes_them() {
-        let mut g = tube();
-        assert!(uv_overlap(&g) < 0.01);
-        // A second layer of the same triangles on the same charts.
-        g.triangles.extend(tube().triangles);
-        g.uv_triangles.extend(tube().uv_triangles);
-        assert!(uv_overlap(&g) > 0.9, "{}", uv_overlap(&g));
-        let mut h = tube();
-        h.uvs.clear();
-        h.uv_triangles.clear();
-        unwrap_uvs(&mut h).unwrap();
-        assert_eq!(h.uv_triangles.len(), h.triangles.len());
-        assert!(uv_overlap(&h) < 0.02, "{}", uv_overlap(&h));
-        h.validate().unwrap();
     }
 }

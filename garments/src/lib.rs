@@ -17,6 +17,7 @@ pub mod library;
 mod mesh;
 mod obj;
 pub mod pattern;
+mod unwrap;
 
 pub use builtin::{BUILTIN, SkirtParams, builtin_names, skirt};
 pub use check::{
@@ -24,9 +25,8 @@ pub use check::{
     check_numbered, check_obj_file, repair, repair_numbered,
 };
 pub use error::{Error, Result};
-pub use import::{
-    median_edge_length, parse_ply, read_mesh, subdivide, unwrap_uvs, uv_overlap, weld,
-};
+pub use import::{median_edge_length, parse_ply, read_mesh, subdivide, uv_overlap, weld};
 pub use mesh::Garment;
 pub use obj::{parse_obj, read_obj, read_obj_numbered, write_mesh_obj, write_obj, write_ply};
 pub use pattern::{Pattern, SewnMesh, joined_roots};
+pub use unwrap::{MAX_CHART_ANGLE_DEG, PanelGuide, unwrap_uvs};

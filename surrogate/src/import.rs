@@ -11,8 +11,9 @@
 //! and shape to the canonical ones by the engine, the body blended over
 //! [`UNWIND_FRAMES`] frames as a simulation's blend-in blends it forward
 //! ([`sim::unwind::unwind`]); settled there with the gates of sewing
-//! ([`sim::sewing::settle_on_body`]); given UVs where it has none or its charts overlap
-//! ([`garments::unwrap_uvs`]).
+//! ([`sim::sewing::settle_on_body`]); given UVs where it has none or its charts overlap, cut
+//! and laid out as a pattern's panels ([`crate::geometry::panel_guide`],
+//! [`garments::unwrap_uvs`]).
 
 use garments::Garment;
 use motions::{BlendIn, BodyModel, FramePose, Motion, ShapedBody, canonical_a_pose};
@@ -20,7 +21,7 @@ use serde::Serialize;
 use sim::sewing::{SewingOptions, SewingReport, settle_on_body};
 
 use crate::error::{Error, Result};
-use crate::geometry::{SMOOTHING_ROUNDS, unpose};
+use crate::geometry::{SMOOTHING_ROUNDS, panel_guide, unpose};
 
 /// Frames the body takes from the worn pose and shape back to the canonical ones (a second, as
 /// `simulate`'s default blend-in).
@@ -101,6 +102,8 @@ pub struct ImportReport {
     pub uvs: String,
     /// Fraction of the file's UV area covered twice (1 without UVs).
     pub uv_overlap_read: f64,
+    /// Charts of the new UVs (none when the file's were kept).
+    pub charts: Option<usize>,
     /// Mean distance from each worn vertex to where unwinding left it on the canonical body, m.
     pub unposed_mean_m: f64,
     /// The drape's gates and figures.
@@ -154,9 +157,6 @@ pub fn import_garment(
     } else {
         "kept"
     };
-    if uvs != "kept" {
-        garments::unwrap_uvs(&mut g)?;
-    }
     let worn = g.positions.clone();
     g.positions = unpose(model, &worn, &g.triangles, shaped, frame, SMOOTHING_ROUNDS)?;
     let bodies = unwinding_bodies(model, shaped, frame)?;
@@ -179,7 +179,14 @@ pub fn import_garment(
         .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt())
         .sum::<f64>()
         / worn.len().max(1) as f64;
-    let (template, drape) = settle_on_body(model, &g, &start, &options.sewing)?;
+    let (mut template, drape) = settle_on_body(model, &g, &start, &options.sewing)?;
+    // Panels are cut on the canonical body, where the template rests.
+    let charts = if uvs == "kept" {
+        None
+    } else {
+        let guide = panel_guide(model, &template.positions, &template.triangles)?;
+        Some(garments::unwrap_uvs(&mut template, &guide)?)
+    };
     let report = ImportReport {
         vertices_read,
         triangles_read,
@@ -189,6 +196,7 @@ pub fn import_garment(
         median_edge_m: garments::median_edge_length(&template),
         uvs: uvs.to_string(),
         uv_overlap_read,
+        charts,
         unposed_mean_m,
         drape,
     };

@@ -11,7 +11,7 @@ mod curve;
 mod meshing;
 mod sleeves;
 mod spec;
-mod uv;
+pub(crate) mod uv;
 
 use std::collections::BTreeSet;
 use std::path::Path;

@@ -223,6 +223,25 @@ impl Skinning {
         })
     }
 
+    /// Each vertex's position unposed to the T-pose of the default body, m.
+    pub fn t_pose(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        self.unposed.iter().map(|x| [x[0], x[1], x[2]])
+    }
+
+    /// Each vertex's nearest vertex of the canonical body.
+    pub fn body_vertices(&self) -> &[u32] {
+        &self.body_vertex
+    }
+
+    /// Vertex `v`'s summed weight on `joints`.
+    pub fn share(&self, v: usize, joints: &[usize]) -> f64 {
+        self.weights[v]
+            .iter()
+            .filter(|(j, _)| joints.contains(j))
+            .map(|(_, w)| w)
+            .sum()
+    }
+
     /// The template skinned to the body of shape `shaped` posed by `frame` (world, m).
     pub fn pose(&self, model: &BodyModel, shaped: &ShapedBody, frame: &FramePose) -> Vec<[f64; 3]> {
         let g = model.joint_transforms(shaped, frame);
