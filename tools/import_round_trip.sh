@@ -3,10 +3,11 @@
 # a template, simulated on a posed, shaped body, one frame written as a plain mesh (no UVs),
 # imported back from that frame's pose, then predicted through the motion and scored against
 # the engine's frames with the correspondence-free metrics, beside the prediction made from the
-# pattern's own template. Usage: tools/import_round_trip.sh BINARY WORKDIR [PATTERN] [MODEL]
+# pattern's own template. Usage: tools/import_round_trip.sh BINARY WORKDIR [PATTERN or DESIGN] [MODEL]
 set -euo pipefail
 bin=$(realpath "$1"); work=$2
-pattern=$(realpath "${3:-../shared/testdata/garmentcode/shirt_mean_specification.json}")
+pattern=${3:-../shared/testdata/garmentcode/shirt_mean_specification.json}
+[ -e "$pattern" ] && pattern=$(realpath "$pattern")  # else a library design's name
 model=${4:-builtin}
 motion=(--motion walk --betas 1.0,-0.5 --blend-frames 10 --settle-frames 5 --frames 35)
 mkdir -p "$work" && cd "$work"
