@@ -312,12 +312,15 @@ fn a_finished_run_resumed_with_more_steps_continues_its_log() {
     assert_eq!(curve(&extended[..first.len()]), curve(&first));
     assert_eq!(extended.last().unwrap()["step"], 40);
     // From step 20 on, the learning rate is the 40-step schedule's (a 40-step run's).
+    // Without --quiet and without a terminal (the bar hidden), each log line is printed.
+    assert!(!said.contains("step 30/40"), "{said}");
     let straight = dir.path().join("straight");
-    ok(&train_args(
-        straight.to_str().unwrap(),
-        &cfg,
-        &["--steps", "40"],
-    ));
+    let loud: Vec<&str> = train_args(straight.to_str().unwrap(), &cfg, &["--steps", "40"])
+        .into_iter()
+        .filter(|a| *a != "--quiet")
+        .collect();
+    let said = ok(&loud);
+    assert!(said.contains("step 30/40: loss "), "{said}");
     let lr = |log: &[Value]| -> Vec<(Value, Value)> {
         log.iter()
             .filter(|l| l["step"].as_u64().unwrap() > 20)

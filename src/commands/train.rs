@@ -97,6 +97,24 @@ pub fn run(args: &TrainArgs) -> Result<()> {
             if line.val_loss.is_some() {
                 last_val = line.val_loss;
             }
+            // Without a terminal the bar is hidden, and `log.jsonl` is written only at
+            // checkpoints: each log line is printed instead, so a run's output shows progress.
+            if bar.is_hidden() && !args.quiet {
+                let val = line
+                    .val_loss
+                    .map(|v| format!(", val {v:.4}"))
+                    .unwrap_or_default();
+                // A closed pipe here is met again by the run's last line, which reports it.
+                let _ = (|| -> Result<()> {
+                    say!(
+                        "step {}/{steps}: loss {:.4}{val}, {:.2} samples/s",
+                        line.step,
+                        line.loss,
+                        line.samples_per_s
+                    );
+                    Ok(())
+                })();
+            }
         }
     })
     .with_context(|| format!("training into {}", args.out.display()))?;
