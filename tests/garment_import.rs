@@ -234,6 +234,13 @@ fn overlapping_uvs_are_unwrapped_again_and_a_non_manifold_mesh_is_refused() {
     assert!(e.contains("non-manifold edges"), "{e}");
     assert!(!out.exists() && !report.exists(), "nothing written");
 
+    // A rest shape shrunk past a fifth is refused by the flag's name, nothing written.
+    let mut shrunk = import(&w.plain, &out, &report);
+    shrunk.extend(["--rest-shrink".to_string(), "0.5".to_string()]);
+    let e = fails(&args(&shrunk));
+    assert!(e.contains("--rest-shrink 0.5"), "{e}");
+    assert!(!out.exists() && !report.exists(), "nothing written");
+
     // A frame past the motion's end is named.
     let mut late = import(&w.plain, &out, &report);
     late[6] = "100000".into();

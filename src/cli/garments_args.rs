@@ -64,6 +64,11 @@ pub enum GarmentsCommand {
         /// Scale the mesh's positions by this factor first (0.01 for a mesh in cm).
         #[arg(long, default_value_t = 1.0)]
         scale: f64,
+        /// The rest shape's size against the worn mesh unposed, 0.8 to 1: below 1 for cloth worn
+        /// stretched by its weight and its body (the default, measured on worn garments:
+        /// docs/GARMENTS.md), 1 for a mesh that is not stretched (a garment lying flat).
+        #[arg(long, default_value_t = surrogate::import::REST_SHRINK)]
+        rest_shrink: f64,
         /// Write what each stage did and the drape's gates to this JSON file.
         #[arg(long)]
         report: Option<PathBuf>,

@@ -29,6 +29,7 @@ pub fn run(command: GarmentsCommand) -> Result<()> {
             betas,
             out,
             scale,
+            rest_shrink,
             report,
             model,
         } => import(
@@ -40,7 +41,11 @@ pub fn run(command: GarmentsCommand) -> Result<()> {
                 body_model: model.body_model.as_deref(),
             },
             &out,
-            scale,
+            surrogate::import::ImportOptions {
+                scale,
+                rest_shrink,
+                ..Default::default()
+            },
             report.as_deref(),
         ),
         GarmentsCommand::Check { file, scale, json } => check(&file, scale, json.as_deref()),
@@ -55,10 +60,21 @@ struct Worn<'a> {
     body_model: Option<&'a Path>,
 }
 
-fn import(mesh: &Path, worn: &Worn, out: &Path, scale: f64, report: Option<&Path>) -> Result<()> {
+fn import(
+    mesh: &Path,
+    worn: &Worn,
+    out: &Path,
+    options: surrogate::import::ImportOptions,
+    report: Option<&Path>,
+) -> Result<()> {
+    let (scale, shrink) = (options.scale, options.rest_shrink);
     anyhow::ensure!(
         scale.is_finite() && scale > 0.0,
         "--scale {scale}: must be a positive number"
+    );
+    anyhow::ensure!(
+        (0.8..=1.0).contains(&shrink),
+        "--rest-shrink {shrink}: must be from 0.8 to 1"
     );
     let model = sim::sources::body_model(worn.body_model)?;
     let garment = garments::read_mesh(mesh)?;
@@ -86,10 +102,6 @@ fn import(mesh: &Path, worn: &Worn, out: &Path, scale: f64, report: Option<&Path
         garment.positions.len(),
         garment.triangles.len()
     );
-    let options = surrogate::import::ImportOptions {
-        scale,
-        ..Default::default()
-    };
     let (template, made) =
         surrogate::import::import_garment(&model, &garment, &shaped, pose, &options)
             .with_context(|| format!("importing {}", mesh.display()))?;
