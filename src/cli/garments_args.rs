@@ -40,8 +40,8 @@ pub enum GarmentsCommand {
     },
     /// Make a garment mesh worn by a posed, shaped body (a scan, an artist's garment, a frame
     /// of a capture: OBJ or PLY, UVs optional) a template on the default body: cleaned,
-    /// subdivided where coarse, unposed and unshaped, settled by the engine with the gates of
-    /// `make`, and given UVs where it has none or its charts overlap. Exits non-zero when a
+    /// subdivided where coarse, carried back to the canonical pose and shape by the engine and
+    /// settled there with the gates of `make`, and given UVs where it has none or its charts overlap. Exits non-zero when a
     /// gate fails (the template and report are still written).
     Import {
         /// The garment mesh (.obj or .ply), in metres unless `--scale` says otherwise.
@@ -64,7 +64,7 @@ pub enum GarmentsCommand {
         /// Scale the mesh's positions by this factor first (0.01 for a mesh in cm).
         #[arg(long, default_value_t = 1.0)]
         scale: f64,
-        /// The rest shape's size against the worn mesh unposed, 0.8 to 1: below 1 for cloth worn
+        /// The rest shape's size against the worn mesh, 0.8 to 1: below 1 for cloth worn
         /// stretched by its weight and its body (the default, measured on worn garments:
         /// docs/GARMENTS.md), 1 for a mesh that is not stretched (a garment lying flat).
         #[arg(long, default_value_t = surrogate::import::REST_SHRINK)]

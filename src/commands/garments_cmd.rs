@@ -97,7 +97,7 @@ fn import(
         )
     })?;
     eprintln!(
-        "{}: {} vertices, {} triangles; cleaning, unposing and draping ...",
+        "{}: {} vertices, {} triangles; cleaning, unwinding and draping ...",
         mesh.display(),
         garment.positions.len(),
         garment.triangles.len()

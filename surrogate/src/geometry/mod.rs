@@ -16,5 +16,5 @@ pub use canonical::{Canonical, RootRemoval};
 pub use maps::GeometryImage;
 pub use nearest::{PosedSurface, nearest_body};
 pub use panels::panel_guide;
-pub use skinning::{FOLDED_JOINTS, SMOOTHING_ROUNDS, Skinning, unpose};
+pub use skinning::{FOLDED_JOINTS, SMOOTHING_ROUNDS, Skinning};
 pub use target::{FrameBase, FrameBody, TargetKind, Targets};

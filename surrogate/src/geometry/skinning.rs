@@ -131,43 +131,6 @@ fn nearest_weights(
     (dense, body_vertex)
 }
 
-/// A garment worn by the body of shape `shaped` posed by `frame` (`posed`, world, m) taken
-/// back to the default shape in the canonical A-pose, where templates rest: the inverse of
-/// [`Skinning::pose`], with weights from the nearest vertex of the posed body (legs folded,
-/// smoothed `rounds` times over `triangles`) and that vertex's shape offset removed. Pose
-/// blend shapes, where a body model has them, are not inverted.
-pub fn unpose(
-    model: &BodyModel,
-    posed: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    shaped: &ShapedBody,
-    frame: &FramePose,
-    rounds: usize,
-) -> Result<Vec<[f64; 3]>> {
-    let worn = model.pose(shaped, frame)?;
-    let at_frame = skinning_transforms(&worn.transforms, shaped);
-    let rest_shape = model.shape(&[])?;
-    let canonical = model.pose(&rest_shape, &canonical_frame())?;
-    let at_rest = skinning_transforms(&canonical.transforms, &rest_shape);
-    let (dense, body_vertex) =
-        nearest_weights(model, &worn.vertices, posed, triangles, rounds, true);
-    let rest = model.template();
-    Ok(posed
-        .iter()
-        .zip(&dense)
-        .zip(&body_vertex)
-        .map(|((y, w), &b)| {
-            let w = sparse(w);
-            let m = blend(&w, &at_frame);
-            let inverse = m.linear.try_inverse().unwrap_or_else(Matrix3::identity);
-            let b = b as usize;
-            let offset = Vector3::from(shaped.vertices[b]) - Vector3::from(rest[b]);
-            let t_pose = inverse * (Vector3::from(*y) - m.translation) - offset;
-            blend(&w, &at_rest).apply(t_pose).into()
-        })
-        .collect())
-}
-
 /// A template's skinning: per garment vertex its weights, its body vertex and its unposed
 /// (T-pose, betas 0) position.
 #[derive(Debug, Clone)]
@@ -311,47 +274,5 @@ mod tests {
         let posed = skinning.pose(&model, &shaped, &moved);
         let d = Vector3::from(posed[3]) - Vector3::from(template[3]);
         assert!((d - Vector3::new(0.5, 0.0, -1.0)).norm() < 1e-9, "{d}");
-    }
-
-    /// Unposing inverts skinning: points that follow their nearest body vertex, skinned to a
-    /// shaped body in a bent pose, come back to where they were on the canonical body.
-    #[test]
-    fn unposing_a_skinned_garment_gives_back_the_template() {
-        let model = BodyModel::default_body();
-        let body = model
-            .pose(&model.shape(&[]).unwrap(), &canonical_frame())
-            .unwrap();
-        // Points on upper-body vertices (above the hips, where no weight is folded).
-        let template: Vec<[f64; 3]> = body
-            .vertices
-            .iter()
-            .step_by(53)
-            .filter(|v| v[1] > 0.1)
-            .copied()
-            .collect();
-        assert!(template.len() > 50, "{} points", template.len());
-        let skinning = Skinning::new(&model, &template, &[], 0).unwrap();
-        let shaped = model.shape(&[1.5, -1.0, 0.5]).unwrap();
-        let mut pose = canonical_a_pose();
-        pose[3 * 16 + 2] -= 0.6; // the left shoulder raised
-        pose[3 * 3] += 0.3; // the spine bent forward
-        let frame = FramePose {
-            pose,
-            transl: [0.2, 0.1, -0.3],
-        };
-        let worn = skinning.pose(&model, &shaped, &frame);
-        let back = unpose(&model, &worn, &[], &shaped, &frame, 0).unwrap();
-        let worst = back
-            .iter()
-            .zip(&template)
-            .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
-            .fold(0.0, f64::max);
-        let moved = worn
-            .iter()
-            .zip(&template)
-            .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
-            .fold(0.0, f64::max);
-        assert!(moved > 0.2, "the pose moves the points ({moved} m)");
-        assert!(worst < 1e-6, "worst {worst} m");
     }
 }
