@@ -26,7 +26,7 @@ pub use check::{
 };
 pub use error::{Error, Result};
 pub use import::{median_edge_length, parse_ply, read_mesh, subdivide, uv_overlap, weld};
-pub use mesh::Garment;
+pub use mesh::{Garment, vertex_neighbours};
 pub use obj::{parse_obj, read_obj, read_obj_numbered, write_mesh_obj, write_obj, write_ply};
 pub use pattern::{Pattern, SewnMesh, joined_roots};
 pub use unwrap::{MAX_CHART_ANGLE_DEG, PanelGuide, unwrap_uvs};

@@ -133,3 +133,41 @@ impl Garment {
         (lo, hi)
     }
 }
+
+/// Each vertex's neighbours along the edges of `triangles`, sorted, without repeats (indices at
+/// or past `vertex_count` are skipped): the rings that smoothing and untangling average over.
+pub fn vertex_neighbours(vertex_count: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut out = vec![Vec::new(); vertex_count];
+    for t in triangles {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            if v < vertex_count {
+                out[v].extend(
+                    [t[(k + 1) % 3], t[(k + 2) % 3]]
+                        .into_iter()
+                        .filter(|&u| (u as usize) < vertex_count),
+                );
+            }
+        }
+    }
+    for ring in &mut out {
+        ring.sort_unstable();
+        ring.dedup();
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn neighbours_are_the_edges_once_each_and_skip_missing_vertices() {
+        // Two triangles sharing the edge 1-2, and one reaching past the vertex count.
+        let rings = vertex_neighbours(4, &[[0, 1, 2], [2, 1, 3], [3, 2, 9]]);
+        assert_eq!(
+            rings,
+            vec![vec![1, 2], vec![0, 2, 3], vec![0, 1, 3], vec![1, 2]]
+        );
+    }
+}

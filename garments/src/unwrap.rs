@@ -138,16 +138,7 @@ pub fn unwrap_uvs(g: &mut Garment, guide: &PanelGuide) -> Result<usize> {
 fn smoothed(positions: &[[f64; 3]], triangles: &[[u32; 3]], rounds: usize) -> Vec<[f64; 3]> {
     const SHRINK: f64 = 0.5;
     const INFLATE: f64 = -0.53;
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); positions.len()];
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if !neighbours[a as usize].contains(&b) {
-                neighbours[a as usize].push(b);
-                neighbours[b as usize].push(a);
-            }
-        }
-    }
+    let neighbours = crate::vertex_neighbours(positions.len(), triangles);
     let mut out = positions.to_vec();
     for factor in [SHRINK, INFLATE].into_iter().cycle().take(2 * rounds) {
         let previous = out.clone();

@@ -39,7 +39,7 @@ pub struct UntangleReport {
 /// Vertices no triangle uses are left alone. A round that ends with more crossings than it
 /// started with is undone.
 pub fn untangle(positions: &mut [Vec3], triangles: &[[u32; 3]]) -> UntangleReport {
-    let neighbours = neighbours(positions.len(), triangles);
+    let neighbours = garments::vertex_neighbours(positions.len(), triangles);
     let mut pairs = self_intersecting_pairs(positions, triangles);
     let before = pairs.len();
     let mut rings = 1;
@@ -98,28 +98,6 @@ pub fn untangle(positions: &mut [Vec3], triangles: &[[u32; 3]]) -> UntangleRepor
         after: pairs.len(),
         rounds,
     }
-}
-
-/// Each vertex's neighbours along triangle edges, sorted, without repeats.
-fn neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut out = vec![Vec::new(); n];
-    for t in triangles {
-        for k in 0..3 {
-            let v = t[k] as usize;
-            if v < n {
-                out[v].extend(
-                    [t[(k + 1) % 3], t[(k + 2) % 3]]
-                        .into_iter()
-                        .filter(|&u| (u as usize) < n),
-                );
-            }
-        }
-    }
-    for list in &mut out {
-        list.sort_unstable();
-        list.dedup();
-    }
-    out
 }
 
 #[cfg(test)]

@@ -60,17 +60,7 @@ fn blend(weights: &[(usize, f64)], a: &[Affine; NUM_JOINTS]) -> Affine {
 /// Averages every vertex's weights with its neighbours' (over the triangles' edges), `rounds`
 /// times (Jacobi: each round reads the previous one); rows keep summing to 1.
 fn smooth(weights: &mut [[f64; NUM_JOINTS]], triangles: &[[u32; 3]], rounds: usize) {
-    let n = weights.len();
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3]);
-            if a < n && (b as usize) < n && !neighbours[a].contains(&b) {
-                neighbours[a].push(b);
-                neighbours[b as usize].push(a as u32);
-            }
-        }
-    }
+    let neighbours = garments::vertex_neighbours(weights.len(), triangles);
     for _ in 0..rounds {
         let previous = weights.to_vec();
         for (v, w) in weights.iter_mut().enumerate() {
