@@ -107,7 +107,7 @@ fn import(
             .with_context(|| format!("importing {}", mesh.display()))?;
     sim::templates::write_template(out, &template)?;
     say!(
-        "{}: {} vertices ({} welded, {} subdivisions), UVs {}; unposed {:.1} cm on average; \
+        "{}: {} vertices ({} welded, {} subdivisions), UVs {}; carried back {:.1} cm on average; \
          inside {}, moving {:.1}%, max stretch {:.3}, self-intersections {}; {:.1} s -> {}",
         mesh.display(),
         made.drape.vertices,
