@@ -94,16 +94,22 @@ fn worn() -> &'static Worn {
     })
 }
 
-fn positions(path: &Path) -> Vec<[f64; 3]> {
+/// The first three fields of each of an OBJ file's lines that start with `prefix` (`v `, `f `),
+/// in the file's own order, each read by `read`.
+fn records<T: Copy>(path: &Path, prefix: &str, read: impl Fn(&str) -> T) -> Vec<[T; 3]> {
     std::fs::read_to_string(path)
         .unwrap()
         .lines()
-        .filter_map(|l| l.strip_prefix("v "))
+        .filter_map(|l| l.strip_prefix(prefix))
         .map(|l| {
-            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            let v: Vec<T> = l.split_whitespace().take(3).map(&read).collect();
             [v[0], v[1], v[2]]
         })
         .collect()
+}
+
+fn positions(path: &Path) -> Vec<[f64; 3]> {
+    records(path, "v ", |x| x.parse().unwrap())
 }
 
 /// The symmetric mean nearest-point distance between two point sets, cm (`E_CD_cm`).
@@ -210,18 +216,9 @@ fn a_worn_frame_without_uvs_comes_back_as_the_designs_template() {
 
 /// The triangles of an OBJ file's `f` lines (zero-based, UV indices dropped).
 fn faces(path: &Path) -> Vec<[u32; 3]> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter_map(|l| l.strip_prefix("f "))
-        .map(|l| {
-            let v: Vec<u32> = l
-                .split_whitespace()
-                .map(|c| c.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                .collect();
-            [v[0], v[1], v[2]]
-        })
-        .collect()
+    records(path, "f ", |c| {
+        c.split('/').next().unwrap().parse::<u32>().unwrap() - 1
+    })
 }
 
 /// Each triangle's three edge lengths over `positions`.

@@ -41,8 +41,8 @@ pub enum GarmentsCommand {
     /// Make a garment mesh worn by a posed, shaped body (a scan, an artist's garment, a frame
     /// of a capture: OBJ or PLY, UVs optional) a template on the default body: cleaned,
     /// subdivided where coarse, carried back to the canonical pose and shape by the engine and
-    /// settled there with the gates of `make`, and given UVs where it has none or its charts overlap. Exits non-zero when a
-    /// gate fails (the template and report are still written).
+    /// settled there with the gates of `make`, and given UVs where it has none or its charts
+    /// overlap. Exits non-zero when a gate fails (the template and report are still written).
     Import {
         /// The garment mesh (.obj or .ply), in metres unless `--scale` says otherwise.
         mesh: PathBuf,
