@@ -398,9 +398,10 @@ pub enum DatasetCommand {
         #[arg(long, default_value = "lbs_residual", value_parser = ["displacement", "lbs_residual"])]
         target: String,
         /// Condition scaling: `bounded` (6D rotations unscaled, a pose-velocity block, a std
-        /// floor for the rest) or `zscore` (every value z-scored, no velocities: the layout
+        /// floor for the rest), `history` (`bounded` and the body's exponentially weighted past
+        /// at 0.1, 0.3 and 1 s) or `zscore` (every value z-scored, no velocities: the layout
         /// before 2026-12-03).
-        #[arg(long, default_value = "bounded", value_parser = ["bounded", "zscore"])]
+        #[arg(long, default_value = "bounded", value_parser = ["bounded", "history", "zscore"])]
         conditions: String,
         /// Also store, per texel, the offset from the skinned template to the nearest point
         /// of the posed body and that point's normal (6 more body channels, `lbs_residual`

@@ -7,7 +7,8 @@
 //! | `rotations_6d` | (L + 1) x 22 x 6 | the window's joint rotations (body joints, hands dropped), oldest frame first, each as the first two columns of its rotation matrix; root orientations with the current frame's heading removed (`Motion::pose_window`) |
 //! | `translations` | L x 3 | the L earlier frames' root translations relative to the current frame's, in its heading frame, m |
 //! | `material` | 3 | k_s, rho and log10 k_b, each mapped linearly from the dataset's range to [-1, 1] |
-//! | `velocities_6d` | 22 x 6 | (bounded scaling only) the current frame's 6D rotations minus the previous frame's, per second |
+//! | `velocities_6d` | 22 x 6 | (bounded and history scalings) the current frame's 6D rotations minus the previous frame's, per second |
+//! | `history_<ms>ms_rotations`, `history_<ms>ms_translation` | 22 x 6, 3 | (history scaling only) per time constant of [`HISTORY_SECONDS`], the body's exponentially weighted past minus its present ([`pose_history`]) |
 //!
 //! How each block is scaled for the network is recorded with it ([`BlockScaling`]): with the
 //! `bounded` layout the 6D rotations are left as they are (they are bounded, and dividing a
@@ -21,6 +22,7 @@ use motions::rotation::axis_angle_to_matrix;
 use serde::{Deserialize, Serialize};
 use sim::Material;
 
+use super::history::{HISTORY_SECONDS, HISTORY_VALUES, pose_history};
 use super::stats::Stats;
 use crate::error::Result;
 
@@ -74,6 +76,9 @@ pub enum ConditionScaling {
     /// 6D rotations unscaled, a velocity block with one scale, the rest z-scored with a
     /// std floor.
     Bounded,
+    /// `Bounded`, then the body's longer past: one block per time constant of
+    /// [`HISTORY_SECONDS`] (issue 53's longer velocity history).
+    History,
 }
 
 impl ConditionScaling {
@@ -82,6 +87,7 @@ impl ConditionScaling {
         match self {
             Self::ZScore => "zscore",
             Self::Bounded => "bounded",
+            Self::History => "history",
         }
     }
 
@@ -90,6 +96,7 @@ impl ConditionScaling {
         match text {
             "zscore" => Some(Self::ZScore),
             "bounded" => Some(Self::Bounded),
+            "history" => Some(Self::History),
             _ => None,
         }
     }
@@ -113,7 +120,8 @@ pub struct ConditionLayout {
     pub window: usize,
     /// Material normalization.
     pub material: MaterialRanges,
-    /// Layout and scaling (with `bounded`, a velocity block follows the material).
+    /// Layout and scaling (with `bounded`, a velocity block follows the material; with
+    /// `history`, the history blocks follow that).
     #[serde(default)]
     pub scaling: ConditionScaling,
 }
@@ -124,11 +132,11 @@ pub const VELOCITIES: &str = "velocities_6d";
 impl ConditionLayout {
     /// The named blocks, in order.
     pub fn blocks(&self) -> Vec<Block> {
-        let bounded = self.scaling == ConditionScaling::Bounded;
+        let bounded = self.scaling != ConditionScaling::ZScore;
         let pick = |new: BlockScaling| {
             if bounded { new } else { BlockScaling::ZScore }
         };
-        let mut sizes = vec![
+        let mut sizes: Vec<(String, usize, BlockScaling, String)> = [
             (
                 "betas",
                 self.betas,
@@ -153,25 +161,49 @@ impl ConditionLayout {
                 pick(BlockScaling::ZScoreFloored),
                 "k_s, rho, log10 k_b mapped linearly from the dataset's ranges to [-1, 1]",
             ),
-        ];
-        if bounded {
-            sizes.push((
+            (
                 VELOCITIES,
-                CONDITION_JOINTS * 6,
+                if bounded { CONDITION_JOINTS * 6 } else { 0 },
                 BlockScaling::Pooled,
                 "current minus previous frame's 6D rotations, per second",
-            ));
+            ),
+        ]
+        .into_iter()
+        .filter(|block| block.1 > 0)
+        .map(|(name, size, scaling, content)| (name.into(), size, scaling, content.into()))
+        .collect();
+        if self.scaling == ConditionScaling::History {
+            // Rotations share one scale; the root's lag in metres is scaled apart (it
+            // reaches a metre over a second of walking, far beyond any rotation's).
+            for tau in HISTORY_SECONDS {
+                let name = format!("history_{:.0}ms", tau * 1000.0);
+                let past = format!(
+                    "weighted over the past with time constant {tau} s, minus the current frame's"
+                );
+                sizes.push((
+                    format!("{name}_rotations"),
+                    HISTORY_VALUES - 3,
+                    BlockScaling::Pooled,
+                    format!("the 22 joints' 6D rotations {past}; root in the heading frame"),
+                ));
+                sizes.push((
+                    format!("{name}_translation"),
+                    3,
+                    BlockScaling::ZScoreFloored,
+                    format!("the root translation {past}; heading frame, m"),
+                ));
+            }
         }
         let mut offset = 0;
         sizes
             .into_iter()
             .map(|(name, size, scaling, content)| {
                 let block = Block {
-                    name: name.to_string(),
+                    name,
                     offset,
                     size,
                     scaling,
-                    content: content.to_string(),
+                    content,
                 };
                 offset += size;
                 block
@@ -245,7 +277,7 @@ impl ConditionLayout {
         out.push(to_unit(material.stretch, m.k_s));
         out.push(to_unit(material.density, m.rho));
         out.push(to_unit(material.bending.log10(), m.log10_k_b));
-        if self.scaling == ConditionScaling::Bounded {
+        if self.scaling != ConditionScaling::ZScore {
             // Within the current frame's heading frame, so the root's turning rate is kept.
             let (now, before) = (
                 &window.poses[self.window],
@@ -258,6 +290,9 @@ impl ConditionLayout {
                     out.extend((0..3).map(|row| (a[(row, col)] - b[(row, col)]) * motion.fps));
                 }
             }
+        }
+        if self.scaling == ConditionScaling::History {
+            out.extend(pose_history(motion, t)?);
         }
         Ok(out)
     }
@@ -393,6 +428,69 @@ mod tests {
                 .iter()
                 .all(|b| b.scaling == BlockScaling::ZScore)
         );
+    }
+
+    /// The history layout is the bounded one followed by a rotation and a translation block
+    /// per time constant, holding [`pose_history`]'s values in its order.
+    #[test]
+    fn the_history_layout_appends_the_weighted_past_to_the_bounded_one() {
+        let frames = (0..40)
+            .map(|k| {
+                let mut pose = [0.0; POSE_DIM];
+                pose[3 * 4] = 0.05 * k as f64;
+                FramePose {
+                    pose,
+                    transl: [0.0, 0.9, 0.03 * k as f64],
+                }
+            })
+            .collect();
+        let motion = Motion::new("test", 30.0, frames).unwrap();
+        let bounded = ConditionLayout {
+            betas: 10,
+            window: 2,
+            material: MaterialRanges::default(),
+            scaling: ConditionScaling::Bounded,
+        };
+        let layout = ConditionLayout {
+            scaling: ConditionScaling::History,
+            ..bounded
+        };
+        assert_eq!(
+            layout.dim(),
+            bounded.dim() + HISTORY_SECONDS.len() * HISTORY_VALUES
+        );
+        let names: Vec<String> = layout.blocks()[5..]
+            .iter()
+            .map(|b| b.name.clone())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "history_100ms_rotations",
+                "history_100ms_translation",
+                "history_300ms_rotations",
+                "history_300ms_translation",
+                "history_1000ms_rotations",
+                "history_1000ms_translation"
+            ]
+        );
+        let material = Material {
+            stretch: 120.0,
+            density: 0.01,
+            bending: 1e-4,
+        };
+        let v = layout.vector(&motion, 39, &[], &material).unwrap();
+        let w = bounded.vector(&motion, 39, &[], &material).unwrap();
+        assert_eq!(&v[..w.len()], &w[..]);
+        assert_eq!(&v[w.len()..], &pose_history(&motion, 39).unwrap()[..]);
+        // The walk forward lags behind the present in every history block.
+        let forward = layout.blocks()[6].offset + 2;
+        assert!(v[forward] < -0.01, "{}", v[forward]);
+        assert_eq!(
+            ConditionScaling::parse("history"),
+            Some(ConditionScaling::History)
+        );
+        assert_eq!(ConditionScaling::History.name(), "history");
     }
 
     /// A manifest stores its layout; one written before the layout was stored (before

@@ -4,6 +4,7 @@
 
 mod conditions;
 mod frames;
+mod history;
 mod manifest;
 mod previous;
 mod sequence;
@@ -15,6 +16,7 @@ pub use conditions::{
     Block, BlockScaling, CONDITION_JOINTS, ConditionLayout, ConditionScaling, VELOCITIES,
 };
 pub use frames::{Frames, TrainingTensors};
+pub use history::{HISTORY_SECONDS, HISTORY_VALUES, pose_history};
 pub use manifest::{
     Normalization, ShardInfo, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest,
 };
