@@ -577,6 +577,7 @@ fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
             zero_outside: true,
             body_channels: channels,
             previous_noise: None,
+            condition_noise: 0.0,
         };
         let mut rng = surrogate::noise::generator(0, 0, 0);
         let batch =
@@ -590,6 +591,46 @@ fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
             );
         }
     }
+    // Condition noise (`training.condition_noise`) moves every condition value of a training
+    // batch by about its spread and nothing else; validation batches are given none.
+    let recipe = |noise: f32| surrogate::train::Recipe {
+        inside_weight: 1.0,
+        prediction: surrogate::model::Prediction::Data,
+        zero_outside: true,
+        body_channels: 6,
+        previous_noise: None,
+        condition_noise: noise,
+    };
+    let batch = |noise: f32| {
+        let mut rng = surrogate::noise::generator(0, 0, 0);
+        surrogate::train::Batch::new(
+            &tensors,
+            &frames,
+            &[1, 0],
+            &[1.0; 2],
+            recipe(noise),
+            &mut rng,
+        )
+    };
+    let (plain, noisy) = (batch(0.0), batch(0.5));
+    assert_eq!(plain.position, noisy.position);
+    assert_eq!(plain.conditions[..d], frames.conditions[d..2 * d]);
+    let moved = plain.conditions.iter().zip(&noisy.conditions);
+    let rms = (moved.map(|(a, b)| (a - b).powi(2)).sum::<f32>() / (2 * d) as f32).sqrt();
+    assert!((0.4..0.6).contains(&rms), "condition noise rms {rms}");
+    let training = surrogate::run::TrainConfig {
+        condition_noise: 0.5,
+        val_frames: 2,
+        ..Default::default()
+    };
+    let validation =
+        surrogate::train::validation_batches(&tensors, &frames, &training, recipe(0.5));
+    let first = frames.len() / 2;
+    assert_eq!(validation[0].conditions[..d], frames.conditions[..d]);
+    assert_eq!(
+        validation[0].conditions[d..],
+        frames.conditions[first * d..(first + 1) * d]
+    );
     assert_eq!(inputs.conditions.len(), frames.len() * d);
     assert!(
         worst(&inputs.conditions, &frames.conditions) < 1e-5,

@@ -61,6 +61,7 @@ fn a_batch_gives_each_frame_the_frame_before() {
         zero_outside: true,
         body_channels: 6,
         previous_noise: Some(noise),
+        condition_noise: 0.0,
     };
     let per = (3 + 6 + 3) * plane;
     let previous_of = |batch: &Batch, slot: usize| {

@@ -95,6 +95,10 @@ pub struct TrainConfig {
     /// before a training sample (0: the simulated previous frame with noise only). Each
     /// step unrolls a depth drawn from 0 to this, without gradients (`train/rollout.rs`).
     pub rollout: usize,
+    /// The spread of Gaussian noise laid on every normalized condition value of a training
+    /// sample (0: none; validation batches get none): blurs the pose a sample is given, so that
+    /// a training sequence cannot be told by its conditions alone (issue 53, arm a26).
+    pub condition_noise: f64,
 }
 
 impl Default for TrainConfig {
@@ -126,6 +130,7 @@ impl Default for TrainConfig {
             checkpoint_every: 100,
             previous_noise: 0.3,
             rollout: 0,
+            condition_noise: 0.0,
         }
     }
 }
@@ -201,6 +206,13 @@ impl TrainConfig {
         }
         if !(self.previous_noise.is_finite() && (0.0..=10.0).contains(&self.previous_noise)) {
             return bad("previous_noise", &self.previous_noise, "must be in [0, 10]");
+        }
+        if !(self.condition_noise.is_finite() && (0.0..=10.0).contains(&self.condition_noise)) {
+            return bad(
+                "condition_noise",
+                &self.condition_noise,
+                "must be in [0, 10]",
+            );
         }
         if self.rollout > 16 {
             return bad("rollout", &self.rollout, "must be at most 16 frames");
@@ -409,6 +421,11 @@ mod tests {
         assert_eq!(
             c.validate().unwrap_err().to_string(),
             "training.lr = -1: must be in (0, 1]"
+        );
+        let c = RunConfig::from_toml("[training]\ncondition_noise = -0.1\n", "m.toml").unwrap();
+        assert_eq!(
+            c.validate().unwrap_err().to_string(),
+            "training.condition_noise = -0.1: must be in [0, 10]"
         );
         let c = RunConfig::from_toml("[model]\nwidth = 64\nheads = 2\n", "m.toml").unwrap();
         assert_eq!(c.model.prediction, crate::model::Prediction::Data);

@@ -52,6 +52,8 @@ pub struct Recipe {
     /// frame's target map (normalized units): at prediction that map is the model's own,
     /// with its errors.
     pub previous_noise: Option<f32>,
+    /// The spread of the Gaussian noise laid on each normalized condition value (0: none).
+    pub condition_noise: f32,
 }
 
 impl Recipe {
@@ -65,6 +67,7 @@ impl Recipe {
             previous_noise: model
                 .previous_state
                 .then_some(training.previous_noise as f32),
+            condition_noise: training.condition_noise as f32,
         }
     }
 }
@@ -122,6 +125,7 @@ impl Batch {
             zero_outside,
             body_channels,
             previous_noise,
+            condition_noise,
         } = recipe;
         let stored = tensors.manifest.body_channels();
         let r = tensors.resolution();
@@ -179,8 +183,13 @@ impl Batch {
                     .zip(inside)
                     .map(|(&m, &i)| m * (1.0 + (inside_weight - 1.0) * i)),
             );
-            b.conditions
-                .extend_from_slice(&split.conditions[f * d..(f + 1) * d]);
+            let conditions = &split.conditions[f * d..(f + 1) * d];
+            if condition_noise > 0.0 {
+                b.conditions
+                    .extend(conditions.iter().map(|c| c + condition_noise * normal(rng)));
+            } else {
+                b.conditions.extend_from_slice(conditions);
+            }
         }
         b
     }
@@ -274,6 +283,11 @@ pub fn validation_batches(
         })
         .collect();
     let mut rng = generator(training.seed, VALIDATION_STREAM, 0);
+    // Validation measures the network on the conditions as they are.
+    let recipe = Recipe {
+        condition_noise: 0.0,
+        ..recipe
+    };
     frames
         .chunks(training.batch)
         .zip(times.chunks(training.batch))
