@@ -592,7 +592,9 @@ fn training_tensors_and_prediction_give_the_network_the_same_inputs() {
         }
     }
     // Condition noise (`training.condition_noise`) moves every condition value of a training
-    // batch by about its spread and nothing else; validation batches are given none.
+    // batch by about its spread and leaves the texel inputs as they were (it is drawn from the
+    // batch's stream after each frame's, so the noise of later frames' noisy targets moves
+    // too); validation batches are given none.
     let recipe = |noise: f32| surrogate::train::Recipe {
         inside_weight: 1.0,
         prediction: surrogate::model::Prediction::Data,

@@ -161,17 +161,18 @@ impl ConditionLayout {
                 pick(BlockScaling::ZScoreFloored),
                 "k_s, rho, log10 k_b mapped linearly from the dataset's ranges to [-1, 1]",
             ),
-            (
-                VELOCITIES,
-                if bounded { CONDITION_JOINTS * 6 } else { 0 },
-                BlockScaling::Pooled,
-                "current minus previous frame's 6D rotations, per second",
-            ),
         ]
         .into_iter()
-        .filter(|block| block.1 > 0)
         .map(|(name, size, scaling, content)| (name.into(), size, scaling, content.into()))
         .collect();
+        if bounded {
+            sizes.push((
+                VELOCITIES.into(),
+                CONDITION_JOINTS * 6,
+                BlockScaling::Pooled,
+                "current minus previous frame's 6D rotations, per second".into(),
+            ));
+        }
         if self.scaling == ConditionScaling::History {
             // Rotations share one scale; the root's lag in metres is scaled apart (it
             // reaches a metre over a second of walking, far beyond any rotation's).
@@ -483,9 +484,11 @@ mod tests {
         let w = bounded.vector(&motion, 39, &[], &material).unwrap();
         assert_eq!(&v[..w.len()], &w[..]);
         assert_eq!(&v[w.len()..], &pose_history(&motion, 39).unwrap()[..]);
-        // The walk forward lags behind the present in every history block.
-        let forward = layout.blocks()[6].offset + 2;
-        assert!(v[forward] < -0.01, "{}", v[forward]);
+        // The walk forward lags behind the present in every history block's translation.
+        for block in [6, 8, 10] {
+            let forward = layout.blocks()[block].offset + 2;
+            assert!(v[forward] < -0.01, "block {block}: {}", v[forward]);
+        }
         assert_eq!(
             ConditionScaling::parse("history"),
             Some(ConditionScaling::History)

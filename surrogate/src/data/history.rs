@@ -17,7 +17,8 @@ use crate::error::Result;
 /// The time constants of the history blocks, seconds.
 pub const HISTORY_SECONDS: [f64; 3] = [0.1, 0.3, 1.0];
 
-/// How many time constants of the past are summed: the weight left beyond is e^-5 (0.7%).
+/// How many of the longest time constant the past is summed over: the weight left beyond is
+/// e^-5 (0.7%) for it, less for the shorter ones.
 const HORIZON: f64 = 5.0;
 
 /// Values per time constant: the 22 joints' 6D rotations, then the root translation (m).
@@ -30,8 +31,11 @@ pub const HISTORY_VALUES: usize = CONDITION_JOINTS * 6 + 3;
 /// the pose window does), so a body that never moved has a history of zeros.
 pub fn pose_history(motion: &Motion, t: usize) -> Result<Vec<f64>> {
     let longest = HISTORY_SECONDS.iter().copied().fold(0.0, f64::max);
-    let frames = (HORIZON * longest * motion.fps).ceil() as usize;
-    let window = motion.pose_window(t, frames)?;
+    let horizon = (HORIZON * longest * motion.fps).ceil();
+    // Frames before the first are the first frame again: they are read once, and their
+    // weights are summed in closed form, so a high frame rate costs no memory.
+    let span = (t as f64).min(horizon) as usize;
+    let window = motion.pose_window(t, span)?;
     let features: Vec<[f64; HISTORY_VALUES]> = window
         .poses
         .iter()
@@ -50,13 +54,21 @@ pub fn pose_history(motion: &Motion, t: usize) -> Result<Vec<f64>> {
             f
         })
         .collect();
-    let now = features[frames];
+    let now = features[span];
     let mut out = Vec::with_capacity(HISTORY_SECONDS.len() * HISTORY_VALUES);
     for tau in HISTORY_SECONDS {
+        let rate = -1.0 / (tau * motion.fps);
+        let q = rate.exp();
+        // The weights of ages span + 1 ..= horizon, all on the first frame.
+        let before_first =
+            q.powf(span as f64 + 1.0) * -(rate * (horizon - span as f64)).exp_m1() / -rate.exp_m1();
         let mut mean = [0.0; HISTORY_VALUES];
         let mut total = 0.0;
         for (age, f) in features.iter().rev().enumerate() {
-            let w = (-(age as f64) / (tau * motion.fps)).exp();
+            let mut w = q.powi(age as i32);
+            if age == span {
+                w += before_first;
+            }
             total += w;
             for (m, v) in mean.iter_mut().zip(f) {
                 *m += w * v;
@@ -133,6 +145,39 @@ mod tests {
             lag(0),
             lag(1),
             lag(2)
+        );
+    }
+
+    /// Before its first frame the body stood in that frame's pose: a motion that starts with
+    /// 200 more copies of its first frame has the same history at the same moment.
+    #[test]
+    fn a_motion_started_later_from_the_same_pose_has_the_same_history() {
+        let moving = |k: usize| {
+            let mut pose = [0.0; POSE_DIM];
+            pose[3 * 4] = 0.03 * k as f64;
+            pose[1] = 0.02 * k as f64;
+            FramePose {
+                pose,
+                transl: [0.01 * k as f64, 0.9, 0.04 * k as f64],
+            }
+        };
+        let short: Vec<FramePose> = (0..20).map(moving).collect();
+        let mut long = vec![short[0]; 200];
+        long.extend(&short);
+        let short = Motion::new("short", 30.0, short).unwrap();
+        let long = Motion::new("long", 30.0, long).unwrap();
+        for t in [0, 1, 10, 19] {
+            let a = pose_history(&short, t).unwrap();
+            let b = pose_history(&long, t + 200).unwrap();
+            for (x, y) in a.iter().zip(&b) {
+                assert!((x - y).abs() < 1e-9, "frame {t}: {x} against {y}");
+            }
+        }
+        assert!(
+            pose_history(&short, 19)
+                .unwrap()
+                .iter()
+                .any(|v| v.abs() > 1e-3)
         );
     }
 

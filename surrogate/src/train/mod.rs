@@ -546,5 +546,10 @@ fn reference_batch(
     let split = if val.is_empty() { train } else { val };
     let frames = [0, split.len() - 1];
     let mut rng = generator(t.seed, 3, 0);
+    // The reference holds held-out conditions as they are, as prediction gives them.
+    let recipe = Recipe {
+        condition_noise: 0.0,
+        ..recipe
+    };
     Batch::new(tensors, split, &frames, &[0.25, 0.75], recipe, &mut rng)
 }
