@@ -422,6 +422,12 @@ pub enum DatasetCommand {
         /// validation data together); the manifest's `joined_to_train` lists them.
         #[arg(long, value_delimiter = ',')]
         train_splits: Vec<String>,
+        /// Also hold every training sequence's mirror image (left and right swapped: the
+        /// motion mirrored joint by joint, the cloth carried by the template's mirror
+        /// correspondence), for templates symmetric within 0.5 cm; the manifest gives each
+        /// template's `mirror_gap_m` and the train split's `mirrored` count.
+        #[arg(long)]
+        mirror: bool,
         #[command(flatten)]
         model: ModelArgs,
         /// Hide the progress bar.

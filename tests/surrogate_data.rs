@@ -357,3 +357,95 @@ fn dataset_tensors_combine_datasets_that_share_material_ranges() {
         );
     }
 }
+
+/// The signed distance (m) of each cloth vertex to the body posed as `pose`.
+fn distances_to_body(
+    model: &motions::BodyModel,
+    pose: &motions::FramePose,
+    betas: &[f64],
+    cloth: &[[f64; 3]],
+) -> Vec<f64> {
+    let mut surface = surrogate::geometry::PosedSurface::default();
+    let body = surrogate::geometry::FrameBody { pose, betas };
+    let surface = surface.at(model, body).unwrap();
+    cloth
+        .iter()
+        .map(|&p| surface.query(p.into(), f64::INFINITY).unwrap().distance)
+        .collect()
+}
+
+/// `dataset tensors --mirror`: the train split holds each sequence's recorded frames unchanged
+/// and then its mirror image; held-out splits are not mirrored. The mirror image is the same
+/// physics: each mirrored cloth vertex lies as far from the mirrored body as the recorded
+/// cloth at its mirror point lies from the recorded body (the nearest vertex stands for the
+/// point; measured 0.002 mm on this symmetric skirt), where the recorded body left unmirrored
+/// misses by 14 mm.
+#[test]
+fn mirrored_tensors_hold_each_training_sequence_and_its_mirror_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = common::tiny_dataset();
+    let (plain, mirrored) = (dir.path().join("plain"), dir.path().join("mirrored"));
+    common::tiny_tensors(&data, &plain, &[]);
+    common::tiny_tensors(&data, &mirrored, &["--mirror"]);
+    let m: Value = json(&mirrored.join("manifest.json"));
+    assert_eq!(m["splits"]["train"]["frames"], 16);
+    assert_eq!(m["splits"]["train"]["mirrored"], 1);
+    assert_eq!(m["splits"]["test_motion"]["frames"], 8);
+    assert!(m["splits"]["test_motion"].get("mirrored").is_none());
+    let gap = m["templates"][0]["mirror_gap_m"].as_f64().unwrap();
+    assert!(gap < 0.005, "the skirt's asymmetry: {gap} m");
+    let tensor = |dir: &Path, name: &str| -> Vec<u8> {
+        let bytes = std::fs::read(dir.join("train-0000.safetensors")).unwrap();
+        let file = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+        file.tensor(name).unwrap().data().to_vec()
+    };
+    for name in ["conditions", "targets", "bodies"] {
+        let (a, b) = (tensor(&plain, name), tensor(&mirrored, name));
+        assert_eq!(2 * a.len(), b.len(), "{name}");
+        assert!(a[..] == b[..a.len()], "{name}: the recorded frames changed");
+        assert!(
+            a[..] != b[a.len()..],
+            "{name}: the mirror image is the recording"
+        );
+    }
+
+    let records = std::fs::read_to_string(data.join("manifest.jsonl")).unwrap();
+    let train: Value = records
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap())
+        .find(|r| r["split"] == "train")
+        .unwrap();
+    let path = data.join(train["file"].as_str().unwrap());
+    let sequence = surrogate::data::Sequence::read(&path).unwrap();
+    let mirror = surrogate::data::TemplateMirror::of_template(&sequence.template, "skirt").unwrap();
+    let image = mirror.sequence(&sequence);
+    let model = motions::BodyModel::default_body();
+    let k = sequence.len() - 1;
+    let recorded = distances_to_body(
+        &model,
+        &sequence.poses[k],
+        &sequence.betas[k],
+        &sequence.garment[k],
+    );
+    let template = &sequence.template.positions;
+    let partner = |i: usize| {
+        let [x, y, z] = template[i];
+        let gap = |p: &[f64; 3]| (p[0] + x).powi(2) + (p[1] - y).powi(2) + (p[2] - z).powi(2);
+        (0..template.len())
+            .min_by(|&a, &b| gap(&template[a]).total_cmp(&gap(&template[b])))
+            .unwrap()
+    };
+    let miss = |pose: &motions::FramePose| {
+        let d = distances_to_body(&model, pose, &image.betas[k], &image.garment[k]);
+        let total: f64 = (0..d.len())
+            .map(|i| (d[i] - recorded[partner(i)]).abs())
+            .sum();
+        total / d.len() as f64
+    };
+    let (mirrored_body, recorded_body) = (miss(&image.poses[k]), miss(&sequence.poses[k]));
+    assert!(mirrored_body < 0.001, "{mirrored_body} m");
+    assert!(
+        recorded_body > 0.005,
+        "{recorded_body} m against {mirrored_body} m"
+    );
+}

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::body_model::BodyModel;
 use crate::error::{Error, Result};
 use crate::rotation::axis_angle_to_matrix;
-use crate::skeleton::{NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM};
+use crate::skeleton::{NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, mirror_joint};
 
 /// A body with its shape applied: rest vertices and rest joints for one set of betas.
 #[derive(Debug, Clone)]
@@ -80,6 +80,28 @@ pub struct FramePose {
     pub pose: [f64; POSE_DIM],
     /// Root translation, added after skinning.
     pub transl: [f64; 3],
+}
+
+impl FramePose {
+    /// The pose's mirror image through the sagittal plane x = 0: left and right joints
+    /// swapped, each rotation reflected (an axis-angle vector is a pseudovector, so it keeps
+    /// its x component and negates y and z), the root moved to -x. On a body model symmetric
+    /// about x = 0 (the default body is, to 0.03 mm), the posed body is the mirror image of
+    /// this pose's posed body, vertex for mirrored vertex.
+    pub fn mirrored(&self) -> FramePose {
+        let mut pose = [0.0; POSE_DIM];
+        for j in 0..NUM_JOINTS {
+            let from = 3 * mirror_joint(j);
+            pose[3 * j] = self.pose[from];
+            pose[3 * j + 1] = -self.pose[from + 1];
+            pose[3 * j + 2] = -self.pose[from + 2];
+        }
+        let [x, y, z] = self.transl;
+        FramePose {
+            pose,
+            transl: [-x, y, z],
+        }
+    }
 }
 
 impl BodyModel {

@@ -34,6 +34,6 @@ pub use motion::{
     BlendIn, MAX_MOTION_FRAMES, MAX_PREFIX_FRAMES, Motion, PoseWindow, canonical_a_pose,
 };
 pub use skeleton::{
-    JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index,
+    JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index, mirror_joint,
 };
 pub use source::{FileFormat, FileMotion, LoadedMotion, MotionSource, place_on_floor};

@@ -63,6 +63,18 @@ pub const SMPL_PARENTS: [Option<usize>; NUM_JOINTS] = [
     Some(21),
 ];
 
+/// The joint a mirror image through the body's sagittal plane (x -> -x) puts in joint `j`'s
+/// place: left and right swapped, the joints on the midline their own.
+pub fn mirror_joint(j: usize) -> usize {
+    let name = JOINT_NAMES[j];
+    let partner = match (name.strip_prefix("left_"), name.strip_prefix("right_")) {
+        (Some(rest), _) => format!("right_{rest}"),
+        (_, Some(rest)) => format!("left_{rest}"),
+        _ => return j,
+    };
+    joint_index(&partner).expect("every left joint has a right one")
+}
+
 /// Index of a joint by its SMPL name.
 pub fn joint_index(name: &str) -> Option<usize> {
     JOINT_NAMES.iter().position(|&n| n == name)

@@ -43,6 +43,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             every,
             shard_frames,
             train_splits,
+            mirror,
             model,
             quiet,
         } => {
@@ -70,6 +71,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 conditions: ConditionScaling::parse(&conditions).context("unknown --conditions")?,
                 nearest: body_nearest,
                 train_splits: joined_splits(&train_splits)?,
+                mirror,
                 ..TensorOptions::default()
             };
             tensors(&dirs, &out, model.body_model.as_deref(), &options, quiet)
@@ -129,12 +131,30 @@ fn tensors(
         r = manifest.resolution,
     );
     for (split, info) in &manifest.splits {
+        let mirrored = match info.mirrored {
+            0 => String::new(),
+            n => format!(" ({n} of them also mirrored)"),
+        };
         say!(
-            "  {split}: {} frames of {} sequences in {} shards",
+            "  {split}: {} frames of {} sequences{mirrored} in {} shards",
             info.frames,
             info.sequences,
             info.shards.len()
         );
+    }
+    if options.mirror {
+        let lopsided: Vec<String> = manifest
+            .templates
+            .iter()
+            .filter_map(|t| {
+                let gap = t.mirror_gap_m?;
+                (gap > surrogate::data::MAX_TEMPLATE_ASYMMETRY_M && t.in_training())
+                    .then(|| format!("{} ({:.2} cm)", t.name, 100.0 * gap))
+            })
+            .collect();
+        if !lopsided.is_empty() {
+            say!("  not mirrored (not symmetric): {}", lopsided.join(", "));
+        }
     }
     say!("  wrote {}", out.join("manifest.json").display());
     Ok(())

@@ -29,6 +29,10 @@ pub struct SplitInfo {
     pub frames: usize,
     /// Sequences.
     pub sequences: usize,
+    /// Of them, how many are also held mirrored (`--mirror`, train split only: each adds a
+    /// second copy of its frames, the mirror image).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub mirrored: usize,
     /// Shard files, in order.
     pub shards: Vec<ShardInfo>,
 }
@@ -46,6 +50,14 @@ pub struct TemplateInfo {
     pub coverage: f64,
     /// Frames per split using it.
     pub frames: BTreeMap<String, usize>,
+    /// With `--mirror`: the mean distance from its mirrored vertices to its surface, m; a
+    /// template past [`crate::data::MAX_TEMPLATE_ASYMMETRY_M`] is not mirrored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mirror_gap_m: Option<f64>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl TemplateInfo {

@@ -6,6 +6,7 @@ mod conditions;
 mod frames;
 mod history;
 mod manifest;
+mod mirror;
 mod previous;
 mod sequence;
 mod shards;
@@ -19,6 +20,9 @@ pub use frames::{Frames, TrainingTensors};
 pub use history::{HISTORY_SECONDS, HISTORY_VALUES, pose_history};
 pub use manifest::{
     Normalization, ShardInfo, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest,
+};
+pub use mirror::{
+    MAX_BODY_ASYMMETRY_M, MAX_TEMPLATE_ASYMMETRY_M, TemplateMirror, body_asymmetry_m,
 };
 pub use previous::previous_state_map;
 pub use sequence::{Floor, Sequence, roundtrip_floor};

@@ -18,6 +18,7 @@ use sim::recording::{Recording, TemplateArrays};
 
 use super::conditions::{ConditionLayout, ConditionScaling};
 use super::manifest::{Normalization, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest};
+use super::mirror::{MAX_BODY_ASYMMETRY_M, TemplateMirror, body_asymmetry_m};
 use super::sequence::Sequence;
 use super::shards::{Frame, write_atomic, write_shards, write_templates};
 use super::stats::{Stats, stats};
@@ -52,6 +53,10 @@ pub struct TensorOptions {
     /// refit of a chosen recipe on its training and validation data together.
     #[serde(default)]
     pub train_splits: [bool; Split::ALL.len()],
+    /// Whether the train split also holds every sequence's mirror image (`mirror.rs`), for
+    /// templates symmetric enough.
+    #[serde(default)]
+    pub mirror: bool,
 }
 
 impl TensorOptions {
@@ -77,6 +82,7 @@ impl Default for TensorOptions {
             conditions: ConditionScaling::Bounded,
             nearest: false,
             train_splits: [false; Split::ALL.len()],
+            mirror: false,
         }
     }
 }
@@ -258,25 +264,41 @@ fn template_images<'a>(
     Ok((names, templates.into_iter().flatten().collect()))
 }
 
-/// What turns a sequence into frames: the body model, the options, the condition layout and
-/// the templates' geometry images.
+/// What turns a sequence into frames: the body model, the options, the condition layout, the
+/// templates' geometry images and, with `--mirror`, their mirror correspondences.
 struct Encoder<'a> {
     model: &'a BodyModel,
     options: &'a TensorOptions,
     layout: ConditionLayout,
     names: &'a [&'a str],
     templates: &'a [(TemplateArrays, GeometryImage)],
+    mirrors: Vec<Option<TemplateMirror>>,
     with_bodies: bool,
 }
 
 impl Encoder<'_> {
+    /// The mirror correspondence of a sequence's template, where the sequence is to be held
+    /// mirrored too (`--mirror`, a symmetric template).
+    fn mirror_of(&self, record: &ManifestRecord) -> Option<&TemplateMirror> {
+        let g = self
+            .names
+            .binary_search(&record.sequence.garment.as_str())
+            .ok()?;
+        self.mirrors[g].as_ref().filter(|m| m.is_symmetric())
+    }
+
     /// The frames of sequence `i` (every `options.every`-th after the blend-in), encoded.
+    /// `mirrored`: the sequence is the mirror image of a recorded one, whose cloth is then
+    /// measured against the template's own mirror image (`TemplateMirror::template`), so that a
+    /// template's asymmetry does not enter the target; the body inputs are the template's, as
+    /// prediction gives them.
     fn sequence(
         &self,
         i: usize,
         record: &ManifestRecord,
         path: &Path,
         s: &Sequence,
+        mirrored: Option<&TemplateMirror>,
     ) -> Result<Vec<Frame>> {
         let (model, options) = (self.model, self.options);
         let g = self
@@ -284,13 +306,20 @@ impl Encoder<'_> {
             .binary_search(&record.sequence.garment.as_str())
             .unwrap_or(0);
         let (template, image) = &self.templates[g];
-        let mut targets = Targets::new(
-            model,
-            &template.positions,
-            &template.triangles,
-            options.target,
-            options.root,
-        )?;
+        let targets_of = |positions: &[[f64; 3]]| {
+            Targets::new(
+                model,
+                positions,
+                &template.triangles,
+                options.target,
+                options.root,
+            )
+        };
+        let mut targets = targets_of(&template.positions)?;
+        let mut mirrored_targets = match mirrored {
+            Some(mirror) => Some(targets_of(&mirror.template(&template.positions))?),
+            None => None,
+        };
         let motion = s.motion()?;
         let mut surface = PosedSurface::default();
         let mut out = Vec::new();
@@ -298,7 +327,11 @@ impl Encoder<'_> {
             let condition = self
                 .layout
                 .vector(&motion, k, &s.betas[k], &s.meta.material)?;
-            let target = targets.encode(model, s.body(k), &s.garment[k])?;
+            let target = mirrored_targets.as_mut().unwrap_or(&mut targets).encode(
+                model,
+                s.body(k),
+                &s.garment[k],
+            )?;
             let map = image.encode(&target).map_err(|e| file_error(path, e))?;
             let bodies = if self.with_bodies {
                 let before = s.body(k.saturating_sub(1));
@@ -322,6 +355,37 @@ impl Encoder<'_> {
         }
         Ok(out)
     }
+}
+
+/// With `--mirror`, each template's mirror correspondence (none without it); a body model
+/// that is not symmetric is refused, naming it.
+fn mirrors(
+    options: &TensorOptions,
+    model: &BodyModel,
+    names: &[&str],
+    templates: &[(TemplateArrays, GeometryImage)],
+) -> Result<Vec<Option<TemplateMirror>>> {
+    if !options.mirror {
+        return Ok(vec![None; templates.len()]);
+    }
+    let gap = body_asymmetry_m(model);
+    if gap > MAX_BODY_ASYMMETRY_M {
+        return Err(crate::error::Error::File {
+            path: model.name().to_string(),
+            problem: format!(
+                "--mirror needs a body symmetric about x = 0: its mirrored rest vertices lie \
+                 {:.1} mm from its own on average (at most {:.1})",
+                1e3 * gap,
+                1e3 * MAX_BODY_ASYMMETRY_M
+            )
+            .into(),
+        });
+    }
+    templates
+        .par_iter()
+        .zip(names)
+        .map(|((t, _), name)| TemplateMirror::of_template(t, name).map(Some))
+        .collect()
 }
 
 /// The train split's sums over loss-mask texels (targets, body inputs) and frames
@@ -426,18 +490,30 @@ fn encode_splits(
         if members.is_empty() {
             continue;
         }
+        let is_train = split == Split::Train.name();
+        let mirrored = match is_train {
+            true => members
+                .iter()
+                .filter(|&&i| encoder.mirror_of(&records[i]).is_some())
+                .count(),
+            false => 0,
+        };
         let frames: Vec<Vec<Frame>> = members
             .par_iter()
             .map(|&i| {
                 let (path, s) = &sequences[i];
-                let frames = encoder.sequence(i, &records[i], path, s);
+                let mut frames = encoder.sequence(i, &records[i], path, s, None)?;
+                if let Some(mirror) = encoder.mirror_of(&records[i]).filter(|_| is_train) {
+                    let image = mirror.sequence(s);
+                    frames.extend(encoder.sequence(i, &records[i], path, &image, Some(mirror))?);
+                }
                 progress();
-                frames
+                Ok(frames)
             })
             .collect::<Result<_>>()?;
         let frames: Vec<Frame> = frames.into_iter().flatten().collect();
         for f in &frames {
-            if split == Split::Train.name() {
+            if is_train {
                 sums.add(f, &loss_masks[f.template]);
             }
             *per_template[f.template]
@@ -447,6 +523,7 @@ fn encode_splits(
         let info = SplitInfo {
             frames: frames.len(),
             sequences: members.len(),
+            mirrored,
             shards: write_shards(out, split, &frames, encoder.options.shard_frames, shape)?,
         };
         splits.insert(split.to_string(), info);
@@ -491,6 +568,7 @@ pub fn write_tensors(
     };
     let (names, templates) = template_images(&records, &sequences, options.resolution)?;
     let loss_masks: Vec<Vec<bool>> = templates.iter().map(|(_, i)| i.loss_mask()).collect();
+    let mirrors = mirrors(options, model, &names, &templates)?;
     std::fs::create_dir_all(out).map_err(|e| file_error(out, e))?;
     let (r, dim) = (options.resolution, layout.dim());
     let encoder = Encoder {
@@ -499,6 +577,7 @@ pub fn write_tensors(
         layout,
         names: &names,
         templates: &templates,
+        mirrors,
         with_bodies,
     };
     let mut sums = TrainSums::new(r, dim, body_channels, templates.len());
@@ -547,6 +626,7 @@ pub fn write_tensors(
                 vertices: t.positions.len(),
                 coverage: image.atlas().coverage(),
                 frames: split_frames.per_template[i].clone(),
+                mirror_gap_m: encoder.mirrors[i].as_ref().map(|m| m.mean_gap_m),
             })
             .collect(),
         templates_sha256,
