@@ -26,6 +26,20 @@ use super::history::{HISTORY_SECONDS, HISTORY_VALUES, pose_history};
 use super::stats::Stats;
 use crate::error::Result;
 
+/// Joint `j`'s rotation in `pose` (axis-angle, 3 values a joint) as its 6D form: the first two
+/// columns of its rotation matrix, column by column.
+pub(crate) fn joint_6d(pose: &[f64], j: usize) -> [f64; 6] {
+    let m = axis_angle_to_matrix([pose[3 * j], pose[3 * j + 1], pose[3 * j + 2]]);
+    [
+        m[(0, 0)],
+        m[(1, 0)],
+        m[(2, 0)],
+        m[(0, 1)],
+        m[(1, 1)],
+        m[(2, 1)],
+    ]
+}
+
 /// Joints whose rotations enter the condition: SMPL's 22 body joints (the hands are dropped:
 /// the built-in motions and AMASS imports leave them at rest).
 pub const CONDITION_JOINTS: usize = 22;
@@ -265,10 +279,7 @@ impl ConditionLayout {
         out.extend((0..self.betas).map(|i| betas.get(i).copied().unwrap_or(0.0)));
         for pose in &window.poses {
             for j in 0..CONDITION_JOINTS {
-                let m = axis_angle_to_matrix([pose[3 * j], pose[3 * j + 1], pose[3 * j + 2]]);
-                for col in 0..2 {
-                    out.extend((0..3).map(|row| m[(row, col)]));
-                }
+                out.extend(joint_6d(pose, j));
             }
         }
         for t in &window.transl[..self.window] {
@@ -285,11 +296,8 @@ impl ConditionLayout {
                 &window.poses[self.window.max(1) - 1],
             );
             for j in 0..CONDITION_JOINTS {
-                let a = axis_angle_to_matrix([now[3 * j], now[3 * j + 1], now[3 * j + 2]]);
-                let b = axis_angle_to_matrix([before[3 * j], before[3 * j + 1], before[3 * j + 2]]);
-                for col in 0..2 {
-                    out.extend((0..3).map(|row| (a[(row, col)] - b[(row, col)]) * motion.fps));
-                }
+                let (a, b) = (joint_6d(now, j), joint_6d(before, j));
+                out.extend((0..6).map(|i| (a[i] - b[i]) * motion.fps));
             }
         }
         if self.scaling == ConditionScaling::History {

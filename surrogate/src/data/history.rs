@@ -9,9 +9,8 @@
 //! values do not depend on where the body walks or which way it faces.
 
 use motions::Motion;
-use motions::rotation::axis_angle_to_matrix;
 
-use super::conditions::CONDITION_JOINTS;
+use super::conditions::{CONDITION_JOINTS, joint_6d};
 use crate::error::Result;
 
 /// The time constants of the history blocks, seconds.
@@ -43,12 +42,7 @@ pub fn pose_history(motion: &Motion, t: usize) -> Result<Vec<f64>> {
         .map(|(pose, transl)| {
             let mut f = [0.0; HISTORY_VALUES];
             for j in 0..CONDITION_JOINTS {
-                let m = axis_angle_to_matrix([pose[3 * j], pose[3 * j + 1], pose[3 * j + 2]]);
-                for col in 0..2 {
-                    for row in 0..3 {
-                        f[6 * j + 3 * col + row] = m[(row, col)];
-                    }
-                }
+                f[6 * j..6 * j + 6].copy_from_slice(&joint_6d(pose, j));
             }
             f[CONDITION_JOINTS * 6..].copy_from_slice(transl);
             f
