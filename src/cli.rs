@@ -424,10 +424,14 @@ pub enum DatasetCommand {
         train_splits: Vec<String>,
         /// Also hold every training sequence's mirror image (left and right swapped: the
         /// motion mirrored joint by joint, the cloth carried by the template's mirror
-        /// correspondence), for templates symmetric within 0.5 cm; the manifest gives each
-        /// template's `mirror_gap_m` and the train split's `mirrored` count.
+        /// correspondence), for templates symmetric within `--mirror-max-gap-cm`; the manifest
+        /// gives each template's `mirror_gap_m` and the train split's `mirrored` count.
         #[arg(long)]
         mirror: bool,
+        /// With `--mirror`: the largest mean distance (cm) from a template's mirrored vertices
+        /// to its surface at which it is mirrored.
+        #[arg(long, default_value_t = 0.5)]
+        mirror_max_gap_cm: f64,
         #[command(flatten)]
         model: ModelArgs,
         /// Hide the progress bar.

@@ -394,6 +394,32 @@ fn mirrored_tensors_hold_each_training_sequence_and_its_mirror_image() {
     assert!(m["splits"]["test_motion"].get("mirrored").is_none());
     let gap = m["templates"][0]["mirror_gap_m"].as_f64().unwrap();
     assert!(gap < 0.005, "the skirt's asymmetry: {gap} m");
+    // Asking for perfect symmetry mirrors nothing (the skirt's drape is 0.0007 mm off); a
+    // negative limit is refused before anything is read.
+    let strict = dir.path().join("strict");
+    common::tiny_tensors(&data, &strict, &["--mirror", "--mirror-max-gap-cm", "0"]);
+    let m: Value = json(&strict.join("manifest.json"));
+    assert_eq!(m["splits"]["train"]["frames"], 8);
+    assert!(m["splits"]["train"].get("mirrored").is_none());
+    let refused = run_with(
+        &[
+            "dataset",
+            "tensors",
+            data.to_str().unwrap(),
+            "--out",
+            dir.path().join("refused").to_str().unwrap(),
+            "--mirror",
+            "--mirror-max-gap-cm=-1",
+        ],
+        &[],
+    );
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("--mirror-max-gap-cm -1"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
+    assert!(!dir.path().join("refused").exists());
     let tensor = |dir: &Path, name: &str| -> Vec<u8> {
         let bytes = std::fs::read(dir.join("train-0000.safetensors")).unwrap();
         let file = safetensors::SafeTensors::deserialize(&bytes).unwrap();

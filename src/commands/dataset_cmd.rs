@@ -44,6 +44,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             shard_frames,
             train_splits,
             mirror,
+            mirror_max_gap_cm,
             model,
             quiet,
         } => {
@@ -59,6 +60,10 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                  tensor file is read at)"
             );
             anyhow::ensure!(
+                (0.0..=100.0).contains(&mirror_max_gap_cm),
+                "--mirror-max-gap-cm {mirror_max_gap_cm}: 0 to 100 (cm)"
+            );
+            anyhow::ensure!(
                 matches!(resolution, 32 | 64 | 128),
                 "--resolution {resolution}: 32, 64 or 128"
             );
@@ -72,6 +77,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
                 nearest: body_nearest,
                 train_splits: joined_splits(&train_splits)?,
                 mirror,
+                mirror_max_gap_m: mirror_max_gap_cm / 100.0,
                 ..TensorOptions::default()
             };
             tensors(&dirs, &out, model.body_model.as_deref(), &options, quiet)
@@ -148,7 +154,7 @@ fn tensors(
             .iter()
             .filter_map(|t| {
                 let gap = t.mirror_gap_m?;
-                (gap > surrogate::data::MAX_TEMPLATE_ASYMMETRY_M && t.in_training())
+                (gap > options.mirror_max_gap_m && t.in_training())
                     .then(|| format!("{} ({:.2} cm)", t.name, 100.0 * gap))
             })
             .collect();

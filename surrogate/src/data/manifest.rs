@@ -51,7 +51,7 @@ pub struct TemplateInfo {
     /// Frames per split using it.
     pub frames: BTreeMap<String, usize>,
     /// With `--mirror`: the mean distance from its mirrored vertices to its surface, m; a
-    /// template past [`crate::data::MAX_TEMPLATE_ASYMMETRY_M`] is not mirrored.
+    /// template past `--mirror-max-gap-cm` is not mirrored.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mirror_gap_m: Option<f64>,
 }

@@ -22,7 +22,7 @@ pub use manifest::{
     Normalization, ShardInfo, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest,
 };
 pub use mirror::{
-    MAX_BODY_ASYMMETRY_M, MAX_TEMPLATE_ASYMMETRY_M, TemplateMirror, body_asymmetry_m,
+    DEFAULT_MIRROR_MAX_GAP_M, MAX_BODY_ASYMMETRY_M, TemplateMirror, body_asymmetry_m,
 };
 pub use previous::previous_state_map;
 pub use sequence::{Floor, Sequence, roundtrip_floor};

@@ -18,7 +18,9 @@ use sim::recording::{Recording, TemplateArrays};
 
 use super::conditions::{ConditionLayout, ConditionScaling};
 use super::manifest::{Normalization, SplitInfo, TENSORS_FORMAT, TemplateInfo, TensorManifest};
-use super::mirror::{MAX_BODY_ASYMMETRY_M, TemplateMirror, body_asymmetry_m};
+use super::mirror::{
+    DEFAULT_MIRROR_MAX_GAP_M, MAX_BODY_ASYMMETRY_M, TemplateMirror, body_asymmetry_m,
+};
 use super::sequence::Sequence;
 use super::shards::{Frame, write_atomic, write_shards, write_templates};
 use super::stats::{Stats, stats};
@@ -57,6 +59,13 @@ pub struct TensorOptions {
     /// templates symmetric enough.
     #[serde(default)]
     pub mirror: bool,
+    /// The largest mean asymmetry (m) of a template that is mirrored.
+    #[serde(default = "default_mirror_max_gap")]
+    pub mirror_max_gap_m: f64,
+}
+
+fn default_mirror_max_gap() -> f64 {
+    DEFAULT_MIRROR_MAX_GAP_M
 }
 
 impl TensorOptions {
@@ -83,6 +92,7 @@ impl Default for TensorOptions {
             nearest: false,
             train_splits: [false; Split::ALL.len()],
             mirror: false,
+            mirror_max_gap_m: DEFAULT_MIRROR_MAX_GAP_M,
         }
     }
 }
@@ -284,7 +294,9 @@ impl Encoder<'_> {
             .names
             .binary_search(&record.sequence.garment.as_str())
             .ok()?;
-        self.mirrors[g].as_ref().filter(|m| m.is_symmetric())
+        self.mirrors[g]
+            .as_ref()
+            .filter(|m| m.is_symmetric(self.options.mirror_max_gap_m))
     }
 
     /// The frames of sequence `i` (every `options.every`-th after the blend-in), encoded.
