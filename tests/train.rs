@@ -379,6 +379,16 @@ fn checkpoints_of_other_models_and_damaged_files_are_refused(checkpoint: &Path, 
     );
     std::fs::write(&saved, text).unwrap();
 
+    let sums = checkpoint.join("checksums.json");
+    let kept = std::fs::read(&sums).unwrap();
+    std::fs::remove_file(&sums).unwrap();
+    let err = fails(resume);
+    assert!(
+        err.contains("checksums.json") && err.contains("missing"),
+        "{err}"
+    );
+    std::fs::write(&sums, kept).unwrap();
+
     let model = checkpoint.join("model.bpk");
     let bytes = std::fs::read(&model).unwrap();
     std::fs::write(&model, &bytes[..bytes.len() / 2]).unwrap();

@@ -20,7 +20,8 @@ fuzz_target!(|data: &[u8]| {
             "checkpoint-00000010/optim.bpk",
             "checkpoint-00000010/ema.bpk",
             "log.jsonl",
-            // Last, so an input of one part fewer has none and burn reads the mutated files.
+            // Last, so an input of one part fewer has none: such a checkpoint is refused before
+            // burn reads it.
             "checkpoint-00000010/checksums.json",
         ],
     );
