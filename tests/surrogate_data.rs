@@ -394,6 +394,11 @@ fn mirrored_tensors_hold_each_training_sequence_and_its_mirror_image() {
     assert!(m["splits"]["test_motion"].get("mirrored").is_none());
     let gap = m["templates"][0]["mirror_gap_m"].as_f64().unwrap();
     assert!(gap < 0.005, "the skirt's asymmetry: {gap} m");
+    // Only templates the train split holds are measured for mirroring.
+    for t in m["templates"].as_array().unwrap() {
+        let trained = t["frames"].get("train").is_some();
+        assert_eq!(t.get("mirror_gap_m").is_some(), trained, "{t}");
+    }
     // Asking for perfect symmetry mirrors nothing (the skirt's drape is 0.0007 mm off); a
     // negative limit is refused before anything is read.
     let strict = dir.path().join("strict");

@@ -287,19 +287,22 @@ struct Encoder<'a> {
 }
 
 impl Encoder<'_> {
-    /// The mirror correspondence of a sequence's template, where the sequence is to be held
-    /// mirrored too (`--mirror`, a symmetric template).
-    fn mirror_of(&self, record: &ManifestRecord) -> Option<&TemplateMirror> {
-        let g = self
-            .names
+    /// The index of a sequence's template (`template_images` gives every garment one).
+    fn template_index(&self, record: &ManifestRecord) -> usize {
+        self.names
             .binary_search(&record.sequence.garment.as_str())
-            .ok()?;
+            .unwrap_or(0)
+    }
+
+    /// The mirror correspondence of template `g`, where its sequences are to be held mirrored
+    /// too (`--mirror`, a training template symmetric within the limit).
+    fn mirror_of(&self, g: usize) -> Option<&TemplateMirror> {
         self.mirrors[g]
             .as_ref()
             .filter(|m| m.is_symmetric(self.options.mirror_max_gap_m))
     }
 
-    /// The frames of sequence `i` (every `options.every`-th after the blend-in), encoded.
+    /// The frames of sequence `i`, on template `g` (every `options.every`-th after the blend-in), encoded.
     /// `mirrored`: the sequence is the mirror image of a recorded one, whose cloth is then
     /// measured against the template's own mirror image (`TemplateMirror::template`), so that a
     /// template's asymmetry does not enter the target; the body inputs are the template's, as
@@ -307,16 +310,12 @@ impl Encoder<'_> {
     fn sequence(
         &self,
         i: usize,
-        record: &ManifestRecord,
+        g: usize,
         path: &Path,
         s: &Sequence,
         mirrored: Option<&TemplateMirror>,
     ) -> Result<Vec<Frame>> {
         let (model, options) = (self.model, self.options);
-        let g = self
-            .names
-            .binary_search(&record.sequence.garment.as_str())
-            .unwrap_or(0);
         let (template, image) = &self.templates[g];
         let targets_of = |positions: &[[f64; 3]]| {
             Targets::new(
@@ -369,13 +368,15 @@ impl Encoder<'_> {
     }
 }
 
-/// With `--mirror`, each template's mirror correspondence (none without it); a body model
-/// that is not symmetric is refused, naming it.
+/// With `--mirror`, the mirror correspondence of each template the train split holds (none
+/// for the others, whose splits are not mirrored, nor without `--mirror`); a body model that
+/// is not symmetric is refused, naming it.
 fn mirrors(
     options: &TensorOptions,
     model: &BodyModel,
     names: &[&str],
     templates: &[(TemplateArrays, GeometryImage)],
+    records: &[ManifestRecord],
 ) -> Result<Vec<Option<TemplateMirror>>> {
     if !options.mirror {
         return Ok(vec![None; templates.len()]);
@@ -393,10 +394,18 @@ fn mirrors(
             .into(),
         });
     }
+    let trained: Vec<&str> = records
+        .iter()
+        .filter(|r| options.lands_in(r.sequence.split) == Split::Train)
+        .map(|r| r.sequence.garment.as_str())
+        .collect();
     templates
         .par_iter()
         .zip(names)
-        .map(|((t, _), name)| TemplateMirror::of_template(t, name).map(Some))
+        .map(|((t, _), name)| match trained.contains(name) {
+            true => TemplateMirror::of_template(t, name).map(Some),
+            false => Ok(None),
+        })
         .collect()
 }
 
@@ -506,7 +515,11 @@ fn encode_splits(
         let mirrored = match is_train {
             true => members
                 .iter()
-                .filter(|&&i| encoder.mirror_of(&records[i]).is_some())
+                .filter(|&&i| {
+                    encoder
+                        .mirror_of(encoder.template_index(&records[i]))
+                        .is_some()
+                })
                 .count(),
             false => 0,
         };
@@ -514,10 +527,11 @@ fn encode_splits(
             .par_iter()
             .map(|&i| {
                 let (path, s) = &sequences[i];
-                let mut frames = encoder.sequence(i, &records[i], path, s, None)?;
-                if let Some(mirror) = encoder.mirror_of(&records[i]).filter(|_| is_train) {
+                let g = encoder.template_index(&records[i]);
+                let mut frames = encoder.sequence(i, g, path, s, None)?;
+                if let Some(mirror) = encoder.mirror_of(g).filter(|_| is_train) {
                     let image = mirror.sequence(s);
-                    frames.extend(encoder.sequence(i, &records[i], path, &image, Some(mirror))?);
+                    frames.extend(encoder.sequence(i, g, path, &image, Some(mirror))?);
                 }
                 progress();
                 Ok(frames)
@@ -580,7 +594,7 @@ pub fn write_tensors(
     };
     let (names, templates) = template_images(&records, &sequences, options.resolution)?;
     let loss_masks: Vec<Vec<bool>> = templates.iter().map(|(_, i)| i.loss_mask()).collect();
-    let mirrors = mirrors(options, model, &names, &templates)?;
+    let mirrors = mirrors(options, model, &names, &templates, &records)?;
     std::fs::create_dir_all(out).map_err(|e| file_error(out, e))?;
     let (r, dim) = (options.resolution, layout.dim());
     let encoder = Encoder {
