@@ -12,7 +12,8 @@ use std::time::{Duration, Instant};
 use common::{binary, fails, json, ok, python_has, run_with, tiny_tensors};
 use serde_json::Value;
 
-/// A tiny model and a short schedule: checkpoints every 10 steps.
+/// A tiny model and a short schedule: checkpoints every 10 steps; dropout on, so that a resumed
+/// run must draw the uninterrupted run's masks.
 const CONFIG: &str = r#"
 [model]
 patch = 4
@@ -30,6 +31,7 @@ log_every = 5
 val_every = 10
 checkpoint_every = 10
 val_frames = 4
+dropout = 0.1
 "#;
 
 /// The tensors (32 x 32, lbs_residual), made once per test binary.

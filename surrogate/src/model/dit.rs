@@ -10,7 +10,7 @@ use burn::prelude::*;
 use burn::tensor::activation::silu;
 
 use super::config::{DitConfig, OUTPUT_CHANNELS};
-use super::layers::{CrossAttention, LinearAttention, MixFfn, norm, timestep_features};
+use super::layers::{CrossAttention, LinearAttention, MixFfn, dropout, norm, timestep_features};
 
 /// Timestep MLP: 256 sinusoidal features -> Linear -> SiLU -> Linear.
 #[derive(Module, Debug)]
@@ -48,16 +48,24 @@ pub struct Block {
 
 impl Block {
     /// Tokens `[B, N, C]`, timestep modulation `[B, 6, C]`, condition tokens `[B, T, C]` ->
-    /// `[B, N, C]`.
-    pub fn forward(&self, x: Tensor<3>, t6: Tensor<3>, condition: Tensor<3>) -> Tensor<3> {
+    /// `[B, N, C]`; `drop`: the dropout rate of the three branches (training only).
+    pub fn forward(
+        &self,
+        x: Tensor<3>,
+        t6: Tensor<3>,
+        condition: Tensor<3>,
+        drop: f64,
+    ) -> Tensor<3> {
         let m = t6 + self.table.val().unsqueeze::<3>();
         let part = |k: usize| m.clone().slice(s![.., k..k + 1, ..]); // [B, 1, C]
         let modulate = |x: Tensor<3>, shift: Tensor<3>, scale: Tensor<3>| {
             norm(x) * (scale.add_scalar(1.0)) + shift
         };
-        let x = x.clone() + part(2) * self.attn.forward(modulate(x, part(0), part(1)));
-        let x = x.clone() + self.cross.forward(x, condition);
-        x.clone() + part(5) * self.ffn.forward(modulate(x, part(3), part(4)))
+        let attn = self.attn.forward(modulate(x.clone(), part(0), part(1)));
+        let x = x + part(2) * dropout(attn, drop);
+        let x = x.clone() + dropout(self.cross.forward(x, condition), drop);
+        let ffn = self.ffn.forward(modulate(x.clone(), part(3), part(4)));
+        x + part(5) * dropout(ffn, drop)
     }
 }
 
@@ -155,6 +163,20 @@ impl Dit {
         timestep: Tensor<1>,
         conditions: Tensor<2>,
     ) -> Tensor<4> {
+        self.forward_dropping(noisy, position, mask, timestep, conditions, 0.0)
+    }
+
+    /// [`Dit::forward`] with each block's branches dropped at `rate` (training, under
+    /// autodiff; elsewhere the same as `forward`).
+    pub fn forward_dropping(
+        &self,
+        noisy: Tensor<4>,
+        position: Tensor<4>,
+        mask: Tensor<4>,
+        timestep: Tensor<1>,
+        conditions: Tensor<2>,
+        rate: f64,
+    ) -> Tensor<4> {
         let x = Tensor::cat(vec![noisy, position, mask], 1);
         let [b, channels, r, _] = x.dims();
         let (p, c) = (self.config.patch, self.config.width);
@@ -175,7 +197,7 @@ impl Dit {
             .forward(silu(self.cond_embed.fc1.forward(conditions)))
             .reshape([b, self.cond_embed.tokens, c]);
         for block in &self.blocks {
-            h = block.forward(h, t6.clone(), condition.clone());
+            h = block.forward(h, t6.clone(), condition.clone(), rate);
         }
         let m = self.final_table.val().unsqueeze::<3>() + t.unsqueeze_dim::<3>(1); // [B, 2, C]
         let shift = m.clone().slice(s![.., 0..1, ..]);
@@ -360,5 +382,34 @@ mod tests {
             .expect("a gradient");
         let g: Vec<f32> = g.try_into_vec_as().unwrap();
         assert!(g.iter().any(|&v| v != 0.0));
+    }
+
+    /// Dropout acts under autodiff only: training's forwards differ from one another and from
+    /// the plain forward, and on the inner device (validation, sampling) it is the plain one.
+    #[test]
+    fn dropout_drops_while_training_only() {
+        let device = Device::flex();
+        let _random = crate::seeded(&device, 5);
+        let model = Dit::new(&tiny(), &device);
+        let (x, pos, mask, s, c) = inputs(2, &device);
+        let values = |out: Tensor<4>| -> Vec<f32> { out.try_into_vec_as().unwrap() };
+        let run = |m: &Dit, d: &Device, rate: f64| {
+            let on = |t: &Tensor<4>| Tensor::<4>::from_data(t.to_data(), d);
+            let (s, c) = (
+                Tensor::<1>::from_data(s.to_data(), d),
+                Tensor::<2>::from_data(c.to_data(), d),
+            );
+            values(m.forward_dropping(on(&x), on(&pos), on(&mask), s, c, rate))
+        };
+        let plain = run(&model, &device, 0.0);
+        assert_eq!(run(&model, &device, 0.3), plain);
+        let trained = model.clone().train();
+        let autodiff = device.clone().autodiff();
+        // Under autodiff the Mix-FFN takes another kernel for the same function: rounding.
+        let largest = crate::model::layers::tests::largest_difference;
+        assert!(largest(&run(&trained, &autodiff, 0.0), &plain) < 1e-4);
+        let (a, b) = (run(&trained, &autodiff, 0.3), run(&trained, &autodiff, 0.3));
+        assert!(largest(&a, &plain) > 1e-3, "dropout changed nothing");
+        assert!(largest(&a, &b) > 1e-3, "two draws dropped the same values");
     }
 }

@@ -25,6 +25,19 @@ pub fn norm(x: Tensor<3>) -> Tensor<3> {
     centred / (var + NORM_EPS).sqrt()
 }
 
+/// Zeroes a `rate` fraction of `x`'s values and scales the rest by `1 / (1 - rate)`, under
+/// autodiff only (training): validation and sampling, which run on the inner device, get `x`.
+/// Functional rather than `burn::nn::Dropout`, whose module field would enter the weights'
+/// record; the masks come from the device's generator, which training seeds per step.
+pub fn dropout<const D: usize>(x: Tensor<D>, rate: f64) -> Tensor<D> {
+    if rate == 0.0 || !x.device().is_autodiff() {
+        return x;
+    }
+    let keep = 1.0 - rate;
+    let mask = x.random_like(burn::tensor::Distribution::Bernoulli(keep));
+    x * mask / keep
+}
+
 /// Sinusoidal features of `s * 1000` for rectified-flow time `s` in [0, 1]: `[B] -> [B, 256]`
 /// (cosines, then sines, DiT's order).
 pub fn timestep_features(s: Tensor<1>) -> Tensor<2> {

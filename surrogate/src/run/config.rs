@@ -99,6 +99,11 @@ pub struct TrainConfig {
     /// sample (0: none; validation batches get none): blurs the pose a sample is given, so that
     /// a training sequence cannot be told by its conditions alone (issue 53, arm a26).
     pub condition_noise: f64,
+    /// The fraction of each block's attention, cross-attention and Mix-FFN outputs zeroed
+    /// (the rest scaled by 1 / (1 - rate)) while training (0: none; validation and sampling
+    /// never drop): a regularizer for a network that learns its training sequences by heart
+    /// (issue 53, arm a31).
+    pub dropout: f64,
 }
 
 impl Default for TrainConfig {
@@ -131,6 +136,7 @@ impl Default for TrainConfig {
             previous_noise: 0.3,
             rollout: 0,
             condition_noise: 0.0,
+            dropout: 0.0,
         }
     }
 }
@@ -213,6 +219,9 @@ impl TrainConfig {
                 &self.condition_noise,
                 "must be in [0, 10]",
             );
+        }
+        if !(self.dropout.is_finite() && (0.0..=0.5).contains(&self.dropout)) {
+            return bad("dropout", &self.dropout, "must be in [0, 0.5]");
         }
         if self.rollout > 16 {
             return bad("rollout", &self.rollout, "must be at most 16 frames");
@@ -426,6 +435,11 @@ mod tests {
         assert_eq!(
             c.validate().unwrap_err().to_string(),
             "training.condition_noise = -0.1: must be in [0, 10]"
+        );
+        let c = RunConfig::from_toml("[training]\ndropout = 0.6\n", "m.toml").unwrap();
+        assert_eq!(
+            c.validate().unwrap_err().to_string(),
+            "training.dropout = 0.6: must be in [0, 0.5]"
         );
         let c = RunConfig::from_toml("[model]\nwidth = 64\nheads = 2\n", "m.toml").unwrap();
         assert_eq!(c.model.prediction, crate::model::Prediction::Data);

@@ -339,6 +339,14 @@ fn fresh(config: &RunConfig, device: &Device) -> Loaded {
     }
 }
 
+/// The device generator's seed for the dropout masks of `step` (0-based) of a run seeded
+/// `seed`: distinct per step, and apart from the seed that drew the initial weights.
+fn dropout_seed(seed: u64, step: usize) -> u64 {
+    seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(step as u64 + 1)
+        .rotate_left(17)
+}
+
 /// Sums over the steps since the last log line.
 struct Interval {
     loss: f64,
@@ -387,7 +395,15 @@ fn run_steps(
             Batch::training(&data.tensors, &data.train, t, data.recipe, step)
         };
         let (noisy, position, mask, time, conditions) = batch.inputs(device);
-        let loss = batch.loss(net.model.forward(noisy, position, mask, time, conditions));
+        if t.dropout > 0.0 {
+            // The masks of step k come from a generator seeded by (seed, k), so that a resumed
+            // run draws the masks the uninterrupted one drew.
+            device.seed(dropout_seed(t.seed, step));
+        }
+        let out = net
+            .model
+            .forward_dropping(noisy, position, mask, time, conditions, t.dropout);
+        let loss = batch.loss(out);
         let loss_value = f64::from(loss.clone().into_scalar::<f32>());
         if !loss_value.is_finite() {
             return Err(Error::Diverged {
