@@ -39,8 +39,8 @@ impl TrainedModel {
 }
 
 /// The shipped model, which `--model builtin` names: an ensemble folder averaging two
-/// networks of one recipe trained with seeds 0 and 1 (the recipe's pair scored 2.322 cm on
-/// validation against 2.451 for its first network alone, at two network calls a frame; the
+/// networks of one recipe trained with seeds 0 and 1 (the recipe's pair scored 2.259 cm on
+/// validation against 2.408 for its first network alone, at two network calls a frame; the
 /// shipped pair is its refit on training and validation data).
 pub fn builtin_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("ensemble")
