@@ -585,4 +585,61 @@ mod tests {
         }
         assert!(count >= 10, "{count} specs");
     }
+
+    /// Issue 53's protocol: no training spec (`specs/train*.toml`) trains on a design or a
+    /// motion of a test split (by name: a capture clip by its file, whatever stretch), nor on
+    /// the validation set's (a capture by its stretch: other stretches of its clip may train).
+    #[test]
+    fn no_training_spec_trains_on_what_validation_or_a_test_split_holds() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../specs");
+        let load = |name: &str| DatasetSpec::load(&dir.join(name)).unwrap();
+        let design = |name: &str| name.split('~').next().unwrap_or(name).to_string();
+        let clip = |source: &str| -> String {
+            let file = source.split(':').next().unwrap_or(source);
+            Path::new(file)
+                .file_stem()
+                .map_or(file.into(), |s| s.to_string_lossy().into())
+        };
+        let mut designs = std::collections::HashSet::<String>::new();
+        let mut motions = std::collections::HashSet::<String>::new();
+        for name in [
+            "test_grid.toml",
+            "test_real_motion.toml",
+            "test_real_pattern.toml",
+        ] {
+            let spec = load(name);
+            designs.extend(spec.garments.iter().map(|g| design(&g.name)));
+            motions.extend(spec.motions.iter().map(|m| clip(&m.source)));
+        }
+        let validation = load("validation.toml");
+        designs.extend(validation.garments.iter().map(|g| design(&g.name)));
+        // A built-in motion by its name; a capture by its stretch.
+        let (stretches, builtins): (Vec<_>, Vec<_>) = validation
+            .motions
+            .iter()
+            .map(|m| m.source.clone())
+            .partition(|s| s.contains('/'));
+        motions.extend(builtins.iter().map(|s| clip(s)));
+        assert!(motions.contains("01_03") && designs.contains("dress_loose_maxi"));
+        let mut checked = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let file = path.file_name().unwrap().to_string_lossy().to_string();
+            if !(file.starts_with("train") && file.ends_with(".toml")) {
+                continue;
+            }
+            let spec = DatasetSpec::load(&path).unwrap();
+            for garment in spec.garments.iter().filter(|g| g.split == Tag::Train) {
+                let name = design(&garment.name);
+                assert!(!designs.contains(&name), "{file} trains on held-out {name}");
+            }
+            for motion in spec.motions.iter().filter(|m| m.split == Tag::Train) {
+                let held =
+                    motions.contains(&clip(&motion.source)) || stretches.contains(&motion.source);
+                assert!(!held, "{file} trains on held-out motion {}", motion.source);
+            }
+            checked += 1;
+        }
+        assert!(checked >= 3, "{checked} training specs");
+    }
 }
