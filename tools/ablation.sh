@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The surrogate's ablation protocol (docs/SURROGATE.md, "The ablation"): one dataset
+# The surrogate's ablation protocol (docs/SURROGATE_ARMS.md, "The ablation"): one dataset
 # (specs/shipped.toml), one fresh held-out set (specs/heldout.toml), every arm trained the
 # same steps on one thread from the configuration in tools/ablation/ARM.toml, then scored by
 # `evaluate` on training sequences, test_garment, test_motion and the shipped `test` split
@@ -21,7 +21,7 @@
 #   tools/ablation.sh baselines DATA HELDOUT OUT                # the no-learning rows, once
 #
 # Environment: DIT_GARMENT_BIN (default target/release/dit-garment), ABLATION_STEPS (500, as
-# measured in docs/SURROGATE.md: 6-7 minutes of one core at batch 8), ABLATION_SEQUENCES (2
+# measured in docs/SURROGATE_ARMS.md: 6-7 minutes of one core at batch 8), ABLATION_SEQUENCES (2
 # per shipped split, as measured).
 set -euo pipefail
 bin=${DIT_GARMENT_BIN:-target/release/dit-garment}

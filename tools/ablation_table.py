@@ -1,4 +1,4 @@
-"""Prints the ablation table of docs/SURROGATE.md from `tools/ablation.sh` results: per arm
+"""Prints the ablation table of docs/SURROGATE_ARMS.md from `tools/ablation.sh` results: per arm
 and split, E_v (cm) / E_c (%) / stretch_p99 / fps of the guided and unguided model, beside the
 no-learning baselines.
 

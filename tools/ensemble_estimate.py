@@ -2,7 +2,7 @@
 without code in the product: each model predicts every sequence (`dit-garment predict
 --config-from`, its default sampler), the predictions are averaged vertex by vertex, and E_v
 is computed on the frames `evaluate` scores (every 5th motion frame). Single-model rows
-reproduce `evaluate`'s E_v, which checks the scoring. docs/SURROGATE.md, "An ensemble".
+reproduce `evaluate`'s E_v, which checks the scoring. docs/SURROGATE_ARMS.md, "An ensemble".
 
 usage: python3 tools/ensemble_estimate.py BIN DATA OUT NAME=MODEL [NAME=MODEL ...]
   BIN   the dit-garment binary; DATA a dataset folder (`synth --out`); OUT a folder for the

@@ -7,7 +7,7 @@
 //! on every machine.
 //!
 //! Why: the surrogate generalizes to unseen designs by what its training designs span, and a
-//! 19-design library spans little (docs/SURROGATE.md, "The ablation"). A variant keeps its
+//! 19-design library spans little (docs/SURROGATE_ARMS.md, "The ablation"). A variant keeps its
 //! base's family: the neckline type and whether it has sleeves never change, and every
 //! measurement moves by at most a few cm (a sleeve by 15% of its length), so a variant of a
 //! t-shirt is a t-shirt of another cut. Such variants did not help unseen designs, whose

@@ -28,7 +28,7 @@ pub const FREQUENCY_DIM: usize = 256;
 /// flow (same function, two speeds; the brief warned that burn's grouped `Conv2d` backward
 /// runs one small convolution per channel on the CPU, but at these sizes it measured faster
 /// than the shifted form). Sampling ignores it: without gradients the Mix-FFN's middle always
-/// runs as one vectorized kernel (`MixFfn::sampling_middle`, docs/SURROGATE.md "A faster
+/// runs as one vectorized kernel (`MixFfn::sampling_middle`, docs/SURROGATE_ARMS.md "A faster
 /// network call"), tested equal to both forms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

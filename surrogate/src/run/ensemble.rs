@@ -1,7 +1,7 @@
 //! An ensemble folder: `ensemble.toml` naming two or more run folders trained on the same
 //! tensors, loaded as one [`TrainedModel`] whose sampler averages the networks' outputs
 //! before guidance. Two models of one recipe trained with different seeds err differently,
-//! and their mean is closer to the truth than either (docs/SURROGATE.md, "An ensemble in the
+//! and their mean is closer to the truth than either (docs/SURROGATE_ARMS.md, "An ensemble in the
 //! product"), at one network call per member.
 //!
 //! ```toml
@@ -21,7 +21,7 @@ use crate::error::{Result, file_error};
 pub const ENSEMBLE_FILE: &str = "ensemble.toml";
 
 /// The most networks an ensemble averages: each costs a network call per frame, and past a
-/// few the mean stops improving (docs/SURROGATE.md, "An ensemble of trained models").
+/// few the mean stops improving (docs/SURROGATE_ARMS.md, "An ensemble of trained models").
 pub const MAX_MEMBERS: usize = 16;
 
 #[derive(Debug, Deserialize)]

@@ -2,7 +2,7 @@
 //!
 //! Teacher forcing shows a previous-state network the simulated frame before, with noise that
 //! stands in for its errors; at prediction it is given its own output, whose errors are neither
-//! that small nor that shapeless, and they compound (arms a19 and a20, docs/SURROGATE.md). Here,
+//! that small nor that shapeless, and they compound (arms a19 and a20, docs/SURROGATE_ARMS.md). Here,
 //! before a step, the network as it is at that step is run without gradients over up to
 //! `rollout` frames before each sample, each frame given the output for the one before (the
 //! first given the simulated frame with noise, or the zero-target map at a sequence's start),
