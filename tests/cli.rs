@@ -328,6 +328,7 @@ fn motions_list_json_has_the_required_motions() {
         "kick",
         "sway",
         "random",
+        "random_legs",
     ] {
         assert!(
             names.contains(&required),

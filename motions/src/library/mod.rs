@@ -2,8 +2,8 @@
 //!
 //! A motion is named `NAME` or `NAME:key=value,...` with the keys `speed` (tempo multiplier,
 //! default 1, range 0.25-3), `amplitude` (joint-angle multiplier, default 1, range 0-1.5),
-//! `duration` (seconds, default per motion, at most 600) and, for `random` only, `seed` (a
-//! whole number: which random motion). Variants of the same motion differ in these
+//! `duration` (seconds, default per motion, at most 600) and, for `random` and `random_legs`
+//! only, `seed` (a whole number: which random motion). Variants of the same motion differ in these
 //! parameters, so training and held-out test sets can use different ones.
 //!
 //! Joint angles are smooth functions of time (sines and smooth bumps) within human ranges,
@@ -37,7 +37,7 @@ pub struct MotionInfo {
 }
 
 /// The built-in motions.
-pub const MOTIONS: [MotionInfo; 11] = [
+pub const MOTIONS: [MotionInfo; 12] = [
     MotionInfo {
         name: "walk",
         description: "walking forward at about 1 m/s, arms swinging",
@@ -93,6 +93,11 @@ pub const MOTIONS: [MotionInfo; 11] = [
         description: "every joint group on its own smooth random course (`seed` picks which)",
         default_duration: 6.0,
     },
+    MotionInfo {
+        name: "random_legs",
+        description: "`random` with the legs' full range: hips flexed to 60 deg and spread, knees to 70",
+        default_duration: 6.0,
+    },
 ];
 
 /// A parsed motion request: a library name and its parameters.
@@ -106,7 +111,7 @@ pub struct MotionSpec {
     pub amplitude: f64,
     /// Duration, seconds.
     pub duration: f64,
-    /// Which random motion (`random` only; 0 for the others).
+    /// Which random motion (`random` and `random_legs` only; 0 for the others).
     pub seed: u64,
 }
 
@@ -134,8 +139,10 @@ impl MotionSpec {
                 .split_once('=')
                 .ok_or_else(|| unknown(format!("'{kv}' is not key=value")))?;
             if k.trim() == "seed" {
-                if spec.name != "random" {
-                    return Err(unknown("only `random` takes a seed".into()));
+                if LegRange::of(&spec.name).is_none() {
+                    return Err(unknown(
+                        "only `random` and `random_legs` take a seed".into(),
+                    ));
                 }
                 spec.seed = v.trim().parse().map_err(|_| {
                     unknown(format!(
@@ -193,14 +200,14 @@ impl MotionSpec {
     /// Generates the motion at 30 fps for a body, planting the feet of that skeleton.
     pub fn generate(&self, model: &BodyModel, shaped: &ShapedBody) -> Result<Motion> {
         let count = (self.duration * OUTPUT_FPS).round().max(1.0) as usize;
-        let random = (self.name == "random").then(|| RandomMotion::new(self.seed));
+        let random = LegRange::of(&self.name).map(|legs| (RandomMotion::new(self.seed), legs));
         let frames: Vec<FramePose> = (0..count)
             .map(|k| {
                 let t = k as f64 / OUTPUT_FPS;
                 let mut b = PoseBuilder::default();
                 let a = self.amplitude * ease_in(t);
                 let lift = match &random {
-                    Some(random) => random.joint_angles(t, self.speed, a, &mut b),
+                    Some((random, legs)) => random.joint_angles(t, self.speed, a, *legs, &mut b),
                     None => joint_angles(&self.name, t, self.speed, a, &mut b),
                 };
                 FramePose {
@@ -256,6 +263,17 @@ impl PoseBuilder {
             .turn(ankle, Axis::X, -ankle_dorsi);
     }
 
+    /// Spreads a hip outward by `degrees` (inward if negative), turning the ankle back so the
+    /// foot stays flat.
+    fn spread_leg(&mut self, side: Side, degrees: f64) {
+        let (hip, ankle, s) = match side {
+            Side::Left => (1, 7, 1.0),
+            Side::Right => (2, 8, -1.0),
+        };
+        self.turn(hip, Axis::Z, s * degrees)
+            .turn(ankle, Axis::Z, -s * degrees);
+    }
+
     /// Places an arm: `down` degrees below horizontal, `forward` degrees of swing to the front,
     /// elbow bent `elbow` degrees towards the front.
     fn arm(&mut self, side: Side, down: f64, forward: f64, elbow: f64) {
@@ -299,7 +317,31 @@ fn ease_in(t: f64) -> f64 {
     u * u * (3.0 - 2.0 * u)
 }
 
-/// The `random` motion: each joint group follows its own sum of two sines, with frequencies
+/// How far a random motion moves the legs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum LegRange {
+    /// `random`: the hips flex -4 to 20 degrees and the knees 0-24 at amplitude 1, as when
+    /// standing and stepping; the hips never spread.
+    Standing,
+    /// `random_legs`: the hips flex -20 to 60 degrees and spread -5 to 20, the knees 0-70.
+    /// Every other training motion keeps the hips within -22 to 56 degrees of flexion and
+    /// never spreads them, while a skirt swings from the legs (a kick flexes one hip to 75
+    /// degrees, a sway rocks the pelvis on the hips).
+    Full,
+}
+
+impl LegRange {
+    /// The leg range of a random motion by its library name; `None` for the scripted ones.
+    fn of(name: &str) -> Option<Self> {
+        match name {
+            "random" => Some(Self::Standing),
+            "random_legs" => Some(Self::Full),
+            _ => None,
+        }
+    }
+}
+
+/// The `random` motions: each joint group follows its own sum of two sines, with frequencies
 /// (0.2-0.8 Hz), phases and weights drawn from the seed, within human ranges. The scripted
 /// motions each move a few joint groups along one pattern (walking twists the spine 3
 /// degrees); a training set needs poses between and beyond them, as a large motion-capture
@@ -311,8 +353,9 @@ struct RandomMotion {
 }
 
 /// Spine bend, twist and side bend; neck turn and nod; per side: arm lift, arm swing, elbow,
-/// hip flexion, knee.
-const RANDOM_CHANNELS: usize = 15;
+/// hip flexion, knee; then per side the hip spread (drawn last, so `random`'s first 15
+/// courses are the same as before `random_legs` was added, which does not use it).
+const RANDOM_CHANNELS: usize = 17;
 
 impl RandomMotion {
     fn new(seed: u64) -> Self {
@@ -331,7 +374,7 @@ impl RandomMotion {
     }
 
     /// Sets the joint angles at time `t`; returns no lift (the feet stay on the ground).
-    fn joint_angles(&self, t: f64, speed: f64, a: f64, b: &mut PoseBuilder) -> f64 {
+    fn joint_angles(&self, t: f64, speed: f64, a: f64, legs: LegRange, b: &mut PoseBuilder) -> f64 {
         let course = |c: usize| -> f64 {
             self.courses[c]
                 .iter()
@@ -348,7 +391,7 @@ impl RandomMotion {
         }
         b.turn(12, Axis::Y, a * 15.0 * course(3))
             .turn(12, Axis::X, a * 8.0 * course(4));
-        for (side, first) in [(Side::Left, 5), (Side::Right, 10)] {
+        for (side, first, spread) in [(Side::Left, 5, 15), (Side::Right, 10, 16)] {
             let lift = 25.0 * (1.0 + course(first));
             b.arm(
                 side,
@@ -356,8 +399,21 @@ impl RandomMotion {
                 a * (10.0 + 30.0 * course(first + 1)),
                 15.0 + a * 35.0 * (1.0 + course(first + 2)),
             );
-            let hip = 8.0 + 12.0 * course(first + 3);
-            let knee = 12.0 * (1.0 + course(first + 4));
+            let (hip, knee) = match legs {
+                LegRange::Standing => (
+                    8.0 + 12.0 * course(first + 3),
+                    12.0 * (1.0 + course(first + 4)),
+                ),
+                LegRange::Full => {
+                    // Spread the hip outward (the foot kept flat) before flexing it, as
+                    // `jumping_jacks` does.
+                    b.spread_leg(side, a * (7.5 + 12.5 * course(spread)));
+                    (
+                        20.0 + 40.0 * course(first + 3),
+                        35.0 * (1.0 + course(first + 4)),
+                    )
+                }
+            };
             b.leg(side, a * hip, a * knee, 0.0);
         }
         0.0
@@ -455,7 +511,7 @@ mod tests {
         assert_eq!(MotionSpec::parse(&spec.label()).unwrap(), spec);
         assert_eq!(MotionSpec::parse("walk").unwrap().label(), "walk");
         for (bad, why) in [
-            ("walk:seed=1", "only `random`"),
+            ("walk:seed=1", "only `random` and `random_legs`"),
             ("random:seed=1.5", "whole number"),
             ("random:seed=-1", "whole number"),
             ("walk:amplitude=2", "outside"),
@@ -489,5 +545,56 @@ mod tests {
         };
         assert!(twist(&one) > 5.0, "{}", twist(&one));
         assert!(twist(&generate("walk")) < 5.0);
+    }
+
+    #[test]
+    fn random_legs_shares_the_upper_body_and_moves_the_legs_further() {
+        let model = BodyModel::default_body();
+        let shaped = model.shape(&[]).unwrap();
+        let generate = |text: &str| {
+            MotionSpec::parse(text)
+                .unwrap()
+                .generate(&model, &shaped)
+                .unwrap()
+        };
+        let standing = generate("random:seed=5,amplitude=1.3");
+        let legs = generate("random_legs:seed=5,amplitude=1.3");
+        assert_eq!(
+            legs.frames,
+            generate("random_legs:seed=5,amplitude=1.3").frames
+        );
+        // Spine, neck, shoulders and elbows follow the same courses.
+        for (a, b) in standing.frames.iter().zip(&legs.frames) {
+            for j in [3, 6, 9, 12, 16, 17, 18, 19] {
+                assert_eq!(
+                    a.pose[3 * j..3 * j + 3],
+                    b.pose[3 * j..3 * j + 3],
+                    "joint {j}"
+                );
+            }
+        }
+        // Largest hip turn over both hips, and largest spread (the axis-angle's z part).
+        let hips = |m: &Motion| {
+            let mut turn: f64 = 0.0;
+            let mut spread: f64 = 0.0;
+            for f in &m.frames {
+                for hip in [1, 2] {
+                    let r = &f.pose[3 * hip..3 * hip + 3];
+                    turn = turn.max(r.iter().map(|x| x * x).sum::<f64>().sqrt().to_degrees());
+                    spread = spread.max(r[2].abs().to_degrees());
+                }
+            }
+            (turn, spread)
+        };
+        let (standing_turn, standing_spread) = hips(&standing);
+        let (legs_turn, legs_spread) = hips(&legs);
+        assert!(
+            standing_turn < 35.0 && standing_spread < 1e-9,
+            "{standing_turn} {standing_spread}"
+        );
+        assert!(
+            legs_turn > 45.0 && legs_spread > 8.0,
+            "{legs_turn} {legs_spread}"
+        );
     }
 }
