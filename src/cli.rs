@@ -7,7 +7,7 @@ use clap::{Args, Parser, Subcommand};
 mod garments_args;
 mod surrogate_args;
 pub use garments_args::GarmentsCommand;
-pub use surrogate_args::{EvaluateArgs, PredictArgs, TrainArgs};
+pub use surrogate_args::{EvaluateArgs, PairedArgs, PredictArgs, TrainArgs};
 
 /// Garment dynamics on SMPL-compatible bodies: a projective-dynamics cloth engine with exact
 /// frictional contact (the ground truth), and DiT-Garment, a diffusion transformer in UV space
@@ -87,6 +87,10 @@ pub enum Command {
     /// baselines that need no learning (lbs, lbs_nearest, floor, rest): JSON and a report
     /// with the paper's tables and pictures; resumable, per-sequence results cached.
     Evaluate(EvaluateArgs),
+    /// Compare two `evaluate --json` results of the same recordings sequence by sequence: the
+    /// mean difference, its standard error and the sequences each wins, per split, garment
+    /// family, motion and garment (is B better than A beyond the sequences' own spread?).
+    Paired(PairedArgs),
 }
 
 #[derive(Debug, Args)]

@@ -104,6 +104,24 @@ pub struct EvaluateArgs {
 }
 
 #[derive(Debug, Args)]
+pub struct PairedArgs {
+    /// The first evaluation (`evaluate --json`): the one compared against.
+    pub a: PathBuf,
+    /// The second evaluation, of the same recordings; differences are B minus A.
+    pub b: PathBuf,
+    /// Which method of each file to compare: `model`, `model_no_guidance` or a baseline.
+    #[arg(long, default_value = "model")]
+    pub method: String,
+    /// Which metric: `E_v`, `E_c`, `E_CD_cm`, ... (any number each sequence reports).
+    #[arg(long, default_value = "E_v")]
+    pub metric: String,
+    /// Write the rows here (`a`, `b`, `method`, `metric`, `rows`: `group`, `sequences`, `a`,
+    /// `b`, `difference`, `sd`, `standard_error`, `b_lower`).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
 pub struct PredictArgs {
     /// Trained model: a run folder (`train --out`), an ensemble folder (`ensemble.toml`),
     /// `builtin` (the shipped ensemble of two networks) or `builtin-single` (its first network

@@ -25,6 +25,7 @@ mod drape_bench;
 mod evaluate;
 mod garments_cmd;
 mod motions_cmd;
+mod paired;
 mod predict;
 mod regress;
 mod render;
@@ -60,6 +61,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Train(args) => train::run(&args),
         Command::Predict(args) => predict::run(&args),
         Command::Evaluate(args) => evaluate::run(&args),
+        Command::Paired(args) => paired::run(&args),
     }
 }
 
@@ -113,6 +115,7 @@ fn check_outputs(command: &Command) -> Result<()> {
             vec![a.obj_dir.as_deref()],
         ),
         Command::Evaluate(a) => (vec![a.json.as_deref()], vec![a.report.as_deref()]),
+        Command::Paired(a) => (vec![a.json.as_deref()], vec![]),
     };
     let outputs: Vec<&Path> = files_out
         .iter()

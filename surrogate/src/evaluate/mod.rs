@@ -10,6 +10,7 @@
 
 pub mod baselines;
 pub mod family;
+pub mod paired;
 mod protocol;
 pub mod report;
 pub mod tables;
