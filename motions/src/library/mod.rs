@@ -523,16 +523,18 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_random_motion_is_fixed_by_its_seed_and_moves_the_spine() {
+    /// A library motion on the default body at its rest shape.
+    fn generate(text: &str) -> Motion {
         let model = BodyModel::default_body();
         let shaped = model.shape(&[]).unwrap();
-        let generate = |text: &str| {
-            MotionSpec::parse(text)
-                .unwrap()
-                .generate(&model, &shaped)
-                .unwrap()
-        };
+        MotionSpec::parse(text)
+            .unwrap()
+            .generate(&model, &shaped)
+            .unwrap()
+    }
+
+    #[test]
+    fn a_random_motion_is_fixed_by_its_seed_and_moves_the_spine() {
         let one = generate("random:seed=1");
         assert_eq!(one.frames, generate("random:seed=1").frames);
         assert_ne!(one.frames, generate("random:seed=2").frames);
@@ -549,14 +551,6 @@ mod tests {
 
     #[test]
     fn random_legs_shares_the_upper_body_and_moves_the_legs_further() {
-        let model = BodyModel::default_body();
-        let shaped = model.shape(&[]).unwrap();
-        let generate = |text: &str| {
-            MotionSpec::parse(text)
-                .unwrap()
-                .generate(&model, &shaped)
-                .unwrap()
-        };
         let standing = generate("random:seed=5,amplitude=1.3");
         let legs = generate("random_legs:seed=5,amplitude=1.3");
         assert_eq!(
