@@ -324,9 +324,9 @@ enum LegRange {
     /// standing and stepping; the hips never spread.
     Standing,
     /// `random_legs`: the hips flex -20 to 60 degrees and spread -5 to 20, the knees 0-70.
-    /// Every other training motion keeps the hips within -22 to 56 degrees of flexion and
-    /// never spreads them, while a skirt swings from the legs (a kick flexes one hip to 75
-    /// degrees, a sway rocks the pelvis on the hips).
+    /// Of the other training motions only `squat` flexes a hip past 56 degrees (both at once)
+    /// and none spreads them, while a skirt swings from the legs (a kick flexes one hip to 75
+    /// degrees with the other straight, a sway rocks the pelvis on the hips).
     Full,
 }
 
