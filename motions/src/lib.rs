@@ -36,4 +36,4 @@ pub use motion::{
 pub use skeleton::{
     JOINT_NAMES, NUM_JOINTS, POSE_DIM, POSE_FEATURE_DIM, SMPL_PARENTS, joint_index, mirror_joint,
 };
-pub use source::{FileFormat, FileMotion, LoadedMotion, MotionSource, place_on_floor};
+pub use source::{FileFormat, FileMotion, LoadedMotion, MotionSource, place_on_floor, short_label};

@@ -56,6 +56,17 @@ pub enum MotionSource {
     File(FileMotion),
 }
 
+/// A motion's name as tables show it: a file motion without its folders
+/// (`01_01.bvh:start=19,duration=2.5`), which differ between machines and crowd a table out;
+/// any other name as it is.
+pub fn short_label(name: &str) -> &str {
+    let path_end = name.find(':').unwrap_or(name.len());
+    match name[..path_end].rfind('/') {
+        Some(slash) => &name[slash + 1..],
+        None => name,
+    }
+}
+
 /// A motion at 30 fps and, for BVH, what retargeting did.
 #[derive(Debug, Clone)]
 pub struct LoadedMotion {
@@ -283,4 +294,27 @@ pub fn place_on_floor(motion: &mut Motion, model: &BodyModel, shaped: &ShapedBod
         frame.transl[2] -= pelvis[2];
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::short_label;
+
+    #[test]
+    fn short_labels_drop_a_files_folders_and_keep_its_stretch() {
+        assert_eq!(
+            short_label("/usr/share/assimp/models/BVH/01_01.bvh:start=19,duration=2.5"),
+            "01_01.bvh:start=19,duration=2.5"
+        );
+        // A joint map's folder is a parameter's, not the motion's: kept.
+        assert_eq!(
+            short_label("data/01_01.bvh:map=maps/skeleton.toml"),
+            "01_01.bvh:map=maps/skeleton.toml"
+        );
+        assert_eq!(
+            short_label("random:seed=3,speed=1.2"),
+            "random:seed=3,speed=1.2"
+        );
+        assert_eq!(short_label("01_01.bvh"), "01_01.bvh");
+    }
 }

@@ -87,7 +87,8 @@ pub fn read(path: &Path, method: &str, metric: &str) -> Result<Vec<Scored>> {
 /// One group's paired comparison: B minus A over the group's sequences.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PairedRow {
-    /// `all`, or `split NAME`, `family NAME`, `motion NAME`, `garment NAME`.
+    /// `all`, or `split NAME`, `family NAME`, `motion NAME`, `garment NAME` (a motion file
+    /// without its folders, [`motions::short_label`]).
     pub group: String,
     /// Sequences in the group.
     pub sequences: usize,
@@ -162,9 +163,9 @@ pub fn compare(a: &[Scored], b: &[Scored]) -> Result<Vec<PairedRow>> {
         }
         if members.len() > 1 {
             groups.extend(
-                members
-                    .into_iter()
-                    .map(|(name, values)| (format!("{kind} {name}"), values)),
+                members.into_iter().map(|(name, values)| {
+                    (format!("{kind} {}", motions::short_label(name)), values)
+                }),
             );
         }
     }

@@ -140,7 +140,9 @@ pub fn write(dir: &Path, output: &Value, results: &[SequenceResult], p: &Picture
                 let e_v = r.methods[&Method::Model].scores.E_v;
                 let title = format!(
                     "{split}, {which}: {} on {} ({}), E_v {e_v:.2} cm",
-                    r.garment, r.motion, r.id
+                    r.garment,
+                    motions::short_label(&r.motion),
+                    r.id
                 );
                 let _ = writeln!(
                     md,

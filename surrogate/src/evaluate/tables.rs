@@ -46,10 +46,16 @@ pub fn text_table(splits: &SplitRows) -> String {
 }
 
 /// The table of a split's groups (families or motions): one line per split, group and
-/// method; `label` names the group column.
+/// method; `label` names the group column; a motion file is shown without its folders
+/// ([`motions::short_label`]).
 pub fn grouped_text_table(label: &str, groups: &GroupRows) -> String {
+    let width = groups
+        .values()
+        .flat_map(|rows| rows.keys())
+        .map(|g| motions::short_label(g).len())
+        .fold(18, usize::max);
     let mut text = format!(
-        "{:<14} {:<18} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}\n",
+        "{:<14} {:<width$} {:<18} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8}\n",
         "split", label, "method", "E_v cm", "E_c %", "inside %", "stretch", "jitter", "fps"
     );
     if groups.keys().all(String::is_empty) {
@@ -62,8 +68,8 @@ pub fn grouped_text_table(label: &str, groups: &GroupRows) -> String {
                     text += &format!("{split:<14} ");
                 }
                 text += &format!(
-                    "{:<18} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}\n",
-                    group,
+                    "{:<width$} {:<18} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.4} {:>8.1}\n",
+                    motions::short_label(group),
                     m.name(),
                     r.scores.E_v,
                     r.scores.E_c,
@@ -406,5 +412,26 @@ mod tests {
         // One factor: test_motion, the model then lbs (Method::ALL's order), the paper's 3.40.
         assert!(md.contains("| test_motion | 0.50 | 1.00 | 3.40 |"), "{md}");
         assert!(md.contains("| simulation (reference) |"));
+    }
+
+    #[test]
+    fn motion_tables_group_by_the_whole_name_and_show_a_files_without_folders() {
+        let mut capture = result("test", 4.0, 2.0);
+        capture.motion = "/usr/share/clips/01_01.bvh:start=19,duration=2.5".into();
+        let results = [capture, result("test", 6.0, 3.0)];
+        let text = grouped_text_table("motion", &aggregate_by(&results, |r| r.motion.clone()));
+        assert!(text.contains("01_01.bvh:start=19,duration=2.5"), "{text}");
+        assert!(!text.contains("/usr/share"), "{text}");
+        // Two motions, two methods: one line each, columns aligned with the header.
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 5, "{text}");
+        let method_column = lines[0].find("method").unwrap();
+        assert!(
+            lines[1..]
+                .iter()
+                .all(|l| l[method_column..].starts_with("lbs")
+                    || l[method_column..].starts_with("model")),
+            "{text}"
+        );
     }
 }
