@@ -140,7 +140,10 @@ fn print_tables(
     say_part!("{}", text_table(splits));
     for (label, groups) in [
         ("family", aggregate_by(results, |r| r.family.clone())),
-        ("motion", aggregate_by(results, |r| r.motion.clone())),
+        (
+            "motion",
+            aggregate_by(results, |r| motions::short_label(&r.motion).to_string()),
+        ),
     ] {
         if groups.values().any(|g| g.len() > 1) {
             say_part!("\n{}", grouped_text_table(label, &groups));

@@ -88,7 +88,7 @@ pub fn read(path: &Path, method: &str, metric: &str) -> Result<Vec<Scored>> {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PairedRow {
     /// `all`, or `split NAME`, `family NAME`, `motion NAME`, `garment NAME` (a motion file
-    /// without its folders, [`motions::short_label`]).
+    /// named without its folders, [`motions::short_label`]).
     pub group: String,
     /// Sequences in the group.
     pub sequences: usize,
@@ -153,7 +153,7 @@ pub fn compare(a: &[Scored], b: &[Scored]) -> Result<Vec<PairedRow>> {
     let kinds: [(&str, GroupKey); 4] = [
         ("split", |s| &s.split),
         ("family", |s| &s.family),
-        ("motion", |s| &s.motion),
+        ("motion", |s| motions::short_label(&s.motion)),
         ("garment", |s| &s.garment),
     ];
     for (kind, key) in kinds {
@@ -163,9 +163,9 @@ pub fn compare(a: &[Scored], b: &[Scored]) -> Result<Vec<PairedRow>> {
         }
         if members.len() > 1 {
             groups.extend(
-                members.into_iter().map(|(name, values)| {
-                    (format!("{kind} {}", motions::short_label(name)), values)
-                }),
+                members
+                    .into_iter()
+                    .map(|(name, values)| (format!("{kind} {name}"), values)),
             );
         }
     }
@@ -237,14 +237,14 @@ mod tests {
     fn differences_are_paired_per_sequence_and_grouped() {
         let a = vec![
             scored("s1", "dress", "kick", 5.0),
-            scored("s2", "dress", "sway", 3.0),
+            scored("s2", "dress", "/clips/sway.bvh:start=1", 3.0),
             scored("s3", "top", "kick", 2.0),
         ];
         // B in another order: pairing is by id.
         let b = vec![
             scored("s3", "top", "kick", 2.5),
             scored("s1", "dress", "kick", 4.0),
-            scored("s2", "dress", "sway", 2.0),
+            scored("s2", "dress", "/clips/sway.bvh:start=1", 2.0),
         ];
         let rows = compare(&a, &b).unwrap();
         let all = &rows[0];
@@ -258,7 +258,8 @@ mod tests {
         assert!((all.sd - 0.75f64.sqrt()).abs() < 1e-12);
         assert!((all.standard_error - 0.5).abs() < 1e-12);
         let names: Vec<&str> = rows.iter().map(|r| r.group.as_str()).collect();
-        // One split: no split rows; two families, two motions, two garments.
+        // One split: no split rows; two families, two motions (a file named without its
+        // folders), two garments.
         assert_eq!(
             names,
             [
@@ -266,7 +267,7 @@ mod tests {
                 "family dress",
                 "family top",
                 "motion kick",
-                "motion sway",
+                "motion sway.bvh:start=1",
                 "garment dress-design",
                 "garment top-design"
             ]
