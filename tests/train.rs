@@ -281,19 +281,79 @@ fn a_killed_run_resumes_to_the_uninterrupted_curve() {
     );
     ok(&train_args(cut.to_str().unwrap(), &cfg, &["--resume"]));
     assert_eq!(curve(&log(&cut)), curve(&log(&whole)));
-    let (a, b) = (
-        std::fs::read(cut.join("model.safetensors")).unwrap(),
-        std::fs::read(whole.join("model.safetensors")).unwrap(),
-    );
+    for file in ["model.safetensors", "best.safetensors"] {
+        assert!(
+            same_weights(&cut.join(file), &whole.join(file)),
+            "{file} differs"
+        );
+    }
+}
+
+/// Whether two safetensors files hold the same tensors, value for value (their metadata
+/// aside).
+fn same_weights(a: &Path, b: &Path) -> bool {
+    let (a, b) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
     let (a, b) = (
         safetensors::SafeTensors::deserialize(&a).unwrap(),
         safetensors::SafeTensors::deserialize(&b).unwrap(),
     );
-    assert_eq!(a.len(), b.len());
-    for (name, tensor) in a.tensors() {
-        let same = b.tensor(&name).is_ok_and(|t| t.data() == tensor.data());
-        assert!(same, "EMA weights '{name}' differ");
-    }
+    a.len() == b.len()
+        && a.tensors()
+            .iter()
+            .all(|(name, t)| b.tensor(name).is_ok_and(|u| u.data() == t.data()))
+}
+
+/// With `training.keep_best` the shipped weights are the EMA of the lowest validation loss
+/// (`best.safetensors`), the summary names its step and the reference output is theirs; the
+/// same run without it ships the last step's EMA and keeps the same `best.safetensors`.
+#[test]
+fn keep_best_ships_the_weights_of_the_lowest_validation_loss() {
+    let dir = tempfile::tempdir().unwrap();
+    // A learning rate high enough that the validation loss is not lowest at the last step.
+    let recipe = CONFIG.replace("lr = 1e-3", "lr = 3e-2");
+    let train = |name: &str, keep_best: bool| {
+        let config = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&config, format!("{recipe}keep_best = {keep_best}\n")).unwrap();
+        let run = dir.path().join(name);
+        ok(&train_args(
+            run.to_str().unwrap(),
+            config.to_str().unwrap(),
+            &[],
+        ));
+        (run.clone(), json(&run.join("summary.json")))
+    };
+    let (best, summary) = train("best", true);
+    let lines = log(&best);
+    let (step, lowest) = lines
+        .iter()
+        .filter_map(|l| Some((l["step"].as_u64()?, l["val_loss"].as_f64()?)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert!(
+        step < 60,
+        "the lowest validation loss is at the end: {lines:?}"
+    );
+    assert_eq!(summary["best_val_step"], step);
+    assert_eq!(summary["model_step"], step);
+    assert_eq!(summary["best_val_loss"].as_f64(), Some(lowest));
+    assert!(same_weights(
+        &best.join("model.safetensors"),
+        &best.join("best.safetensors")
+    ));
+    the_weights_name_what_made_them(&best);
+    the_weights_reproduce_the_reference_output(&best);
+
+    let (last, summary) = train("last", false);
+    assert_eq!(summary["model_step"], 60);
+    assert_eq!(summary["best_val_step"], step);
+    assert!(same_weights(
+        &last.join("best.safetensors"),
+        &best.join("best.safetensors")
+    ));
+    assert!(!same_weights(
+        &last.join("model.safetensors"),
+        &best.join("model.safetensors")
+    ));
 }
 
 #[test]

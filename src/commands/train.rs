@@ -120,14 +120,17 @@ pub fn run(args: &TrainArgs) -> Result<()> {
     .with_context(|| format!("training into {}", args.out.display()))?;
     bar.finish_and_clear();
     say!(
-        "trained {} steps in {:.1} s ({:.2} samples/s): final loss {:.4}, best validation loss {}; weights in {}",
+        "trained {} steps in {:.1} s ({:.2} samples/s): final loss {:.4}, best validation loss {}; weights of step {} in {}",
         summary.steps,
         summary.wall_s,
         summary.samples_per_s,
         summary.final_loss,
-        summary
-            .best_val_loss
-            .map_or("none".into(), |v| format!("{v:.4}")),
+        match (summary.best_val_loss, summary.best_val_step) {
+            (Some(v), Some(step)) => format!("{v:.4} (step {step})"),
+            (Some(v), None) => format!("{v:.4}"),
+            _ => "none".into(),
+        },
+        summary.model_step,
         args.out.join("model.safetensors").display()
     );
     Ok(())

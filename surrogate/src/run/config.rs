@@ -104,6 +104,10 @@ pub struct TrainConfig {
     /// never drop): a regularizer for a network that learns its training sequences by heart
     /// (issue 53, arm a31).
     pub dropout: f64,
+    /// Ship the EMA weights of the lowest validation loss (`RUN/best.safetensors`, the
+    /// training data's own held-out split) as `model.safetensors` instead of the last step's:
+    /// early stopping that never looks at a set used for choosing arms.
+    pub keep_best: bool,
 }
 
 impl Default for TrainConfig {
@@ -137,6 +141,7 @@ impl Default for TrainConfig {
             rollout: 0,
             condition_noise: 0.0,
             dropout: 0.0,
+            keep_best: false,
         }
     }
 }

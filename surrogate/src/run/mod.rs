@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 pub use config::{Objective, RunConfig, TimeSampling, TrainConfig};
 pub use ensemble::ENSEMBLE_FILE;
 pub(crate) use weights::check_weights_file;
-pub use weights::{COMMIT, Provenance, TENSORS_MANIFEST, TrainedModel, load_run, save_weights};
+pub use weights::{
+    COMMIT, Provenance, TENSORS_MANIFEST, TrainedModel, load_run, load_weights, save_weights,
+};
 
 use crate::error::{Error, Result};
 

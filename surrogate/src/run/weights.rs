@@ -102,23 +102,36 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     let config = RunConfig::load_saved(&config_path)?;
     config.validate().map_err(|e| file_error(&config_path, e))?;
     let weights = run.join("model.safetensors");
+    let model = load_weights(&weights, &config, &config_path, device)?;
+    Ok((config, model))
+}
+
+/// The network of `config` with the weights in `weights` (a run's `model.safetensors` or
+/// `best.safetensors`; `config_path` names the configuration in errors), refused whole where
+/// they do not fit.
+pub fn load_weights(
+    weights: &Path,
+    config: &RunConfig,
+    config_path: &Path,
+    device: &Device,
+) -> Result<Dit> {
     if !weights.exists() {
         // A link to nothing (or a loop of links) is there, just not readable.
         let problem = match weights.symlink_metadata() {
             Ok(_) => "a link that leads to no file (or a loop of links)",
             Err(_) => "missing (train the model first)",
         };
-        return Err(file_error(&weights, problem));
+        return Err(file_error(weights, problem));
     }
     // Counted before the network is built, so the weights of a far larger network are
     // refused without allocating it.
     let (values, expected) = (
-        check_model_weights(&weights)?,
+        check_model_weights(weights)?,
         config.model.parameter_count(),
     );
     if values != expected {
         return Err(file_error(
-            &weights,
+            weights,
             format!(
                 "does not fit {}: it holds {values} values, that network has {expected} \
                  parameters (the weights of another model)",
@@ -127,10 +140,10 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
         ));
     }
     let mut model = Dit::new(&config.model, device);
-    let mut store = SafetensorsStore::from_file(&weights).with_from_adapter(PyTorchToBurnAdapter);
+    let mut store = SafetensorsStore::from_file(weights).with_from_adapter(PyTorchToBurnAdapter);
     let result = model.load_from(&mut store).map_err(|e| {
         file_error(
-            &weights,
+            weights,
             format!(
                 "does not fit {} (damaged, or the weights of another model): {e}",
                 config_path.display()
@@ -139,11 +152,11 @@ pub fn load_run(run: &Path, device: &Device) -> Result<(RunConfig, Dit)> {
     })?;
     if !result.is_success() || !result.missing.is_empty() || !result.unused.is_empty() {
         return Err(file_error(
-            &weights,
+            weights,
             format!("does not fit {}: {result}", config_path.display()),
         ));
     }
-    Ok((config, model))
+    Ok(model)
 }
 
 /// The run file holding the manifest of the tensors a model was trained on.

@@ -24,6 +24,10 @@ pub struct RunState {
     pub wall_s: f64,
     /// Lowest validation loss so far.
     pub best_val_loss: Option<f64>,
+    /// The step of that loss, whose EMA weights `RUN/best.safetensors` holds (absent in
+    /// checkpoints written before the file was).
+    #[serde(default)]
+    pub best_val_step: Option<usize>,
 }
 
 /// `RUN/checkpoint.json`.
@@ -288,6 +292,7 @@ mod tests {
             step: 10,
             wall_s: 1.0,
             best_val_loss: None,
+            best_val_step: None,
         };
         let mut large = small.clone();
         large.model.width = 2048;

@@ -5,8 +5,8 @@
 //!
 //! A run folder holds `config.toml`, `tensors.json` (the manifest of the tensors trained on:
 //! what sampling needs of the data), `log.jsonl`, `loss.png`, `checkpoint-<step>/`,
-//! `model.safetensors` (EMA), `reference.safetensors` and `summary.json`, each written
-//! through a temporary name.
+//! `model.safetensors` (EMA), `best.safetensors` (the EMA at the lowest validation loss),
+//! `reference.safetensors` and `summary.json`, each written through a temporary name.
 
 mod batch;
 pub(crate) mod checkpoint;
@@ -31,7 +31,12 @@ use crate::data::{Frames, TrainingTensors};
 use crate::error::{Error, Result, file_error};
 use crate::model::Dit;
 use crate::noise::generator;
-use crate::run::{COMMIT, Provenance, RunConfig, TENSORS_MANIFEST, TrainConfig, save_weights};
+use crate::run::{
+    COMMIT, Provenance, RunConfig, TENSORS_MANIFEST, TrainConfig, load_weights, save_weights,
+};
+
+/// The EMA weights of the lowest validation loss so far, in the run folder.
+pub const BEST_WEIGHTS: &str = "best.safetensors";
 
 /// One line of `log.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -64,6 +69,13 @@ pub struct Summary {
     pub final_loss: f64,
     /// Lowest validation loss (EMA weights), if any was evaluated.
     pub best_val_loss: Option<f64>,
+    /// The step of that loss (`best.safetensors` holds its weights).
+    #[serde(default)]
+    pub best_val_step: Option<usize>,
+    /// The step whose EMA weights `model.safetensors` holds: the last one, or with
+    /// `training.keep_best` the best one.
+    #[serde(default)]
+    pub model_step: usize,
     /// Wall time of all sessions, s.
     pub wall_s: f64,
     /// Frames per second of wall time over the run.
@@ -335,6 +347,7 @@ fn fresh(config: &RunConfig, device: &Device) -> Loaded {
             step: 0,
             wall_s: 0.0,
             best_val_loss: None,
+            best_val_step: None,
         },
     }
 }
@@ -441,6 +454,9 @@ fn run_steps(
         );
         log.push(line.clone());
         progress(Event::Log(line));
+        if net.state.best_val_step == Some(done) {
+            save_weights(&net.ema, &run.join(BEST_WEIGHTS), &provenance(options)?)?;
+        }
         interval = Interval::new();
         if done.is_multiple_of(t.checkpoint_every) {
             // The log first: a run killed between the two resumes with its whole history
@@ -475,8 +491,11 @@ fn log_line(
     let val_loss = (done.is_multiple_of(t.val_every) || done == t.steps)
         .then(|| validation_loss(ema, &data.val_batches, device))
         .flatten();
-    if let Some(v) = val_loss {
-        state.best_val_loss = Some(state.best_val_loss.map_or(v, |b: f64| b.min(v)));
+    if let Some(v) = val_loss
+        && state.best_val_loss.is_none_or(|b| v < b)
+    {
+        state.best_val_loss = Some(v);
+        state.best_val_step = Some(done);
     }
     let steps = interval.steps as f64;
     LogLine {
@@ -491,8 +510,18 @@ fn log_line(
     }
 }
 
+/// What made a run's weights: its configuration, the tensors' manifest, the commit.
+fn provenance(options: &TrainOptions) -> Result<Provenance> {
+    Ok(Provenance {
+        config_sha256: files::sha256_file(&options.out.join("config.toml"))?.0,
+        dataset_manifest_sha256: files::sha256_file(&options.data.join("manifest.json"))?.0,
+        commit: COMMIT.to_string(),
+    })
+}
+
 /// The run's outputs: the log and its plot, a last checkpoint where the steps ended between
-/// two, the EMA weights with their provenance, the reference batch and the summary.
+/// two, the EMA weights shipped (the last, or with `keep_best` the best) with their
+/// provenance, the reference batch of those weights and the summary.
 fn finish(
     options: &TrainOptions,
     config: &RunConfig,
@@ -508,15 +537,22 @@ fn finish(
     if saved_at != state.step {
         checkpoint::save(run, config, &net.model, &net.optim, &net.ema, state)?;
     }
-    let provenance = Provenance {
-        config_sha256: files::sha256_file(&run.join("config.toml"))?.0,
-        dataset_manifest_sha256: files::sha256_file(&options.data.join("manifest.json"))?.0,
-        commit: COMMIT.to_string(),
+    let best = run.join(BEST_WEIGHTS);
+    let (shipped, model_step) = match state.best_val_step {
+        Some(step) if t.keep_best && best.is_file() => (
+            load_weights(&best, config, &run.join("config.toml"), &options.device)?,
+            step,
+        ),
+        _ => (net.ema.clone(), state.step),
     };
-    save_weights(&net.ema, &run.join("model.safetensors"), &provenance)?;
+    save_weights(
+        &shipped,
+        &run.join("model.safetensors"),
+        &provenance(options)?,
+    )?;
     let reference = reference_batch(&data.tensors, &data.train, &data.val, t, data.recipe);
     save_reference(
-        &net.ema,
+        &shipped,
         &reference,
         &run.join("reference.safetensors"),
         &options.device,
@@ -526,6 +562,8 @@ fn finish(
         parameters: net.model.parameters(),
         final_loss: log.last().map_or(f64::NAN, |l| l.loss),
         best_val_loss: state.best_val_loss,
+        best_val_step: state.best_val_step,
+        model_step,
         wall_s: state.wall_s,
         samples_per_s: (state.step * t.batch) as f64 / state.wall_s.max(1e-9),
         config: config.clone(),
