@@ -390,12 +390,14 @@ impl RunConfig {
 
     /// What keeps `self` from resuming the run saved as `saved`: every difference but a
     /// larger `training.steps`, which extends the run (the learning rate's schedule from the
-    /// resumed step on is then the longer run's).
+    /// resumed step on is then the longer run's), and `training.keep_best`, which changes
+    /// only which weights the finished run ships (`best.safetensors` is kept either way).
     pub fn resume_difference(&self, saved: &Self) -> Option<String> {
         let mut extended = saved.clone();
         if self.training.steps > saved.training.steps {
             extended.training.steps = self.training.steps;
         }
+        extended.training.keep_best = self.training.keep_best;
         self.first_difference(&extended)
     }
 }
@@ -455,7 +457,7 @@ mod tests {
     }
 
     #[test]
-    fn resuming_may_extend_the_steps_and_change_nothing_else() {
+    fn resuming_may_extend_the_steps_and_choose_the_shipped_weights_and_change_nothing_else() {
         let saved = RunConfig::default();
         let mut longer = saved.clone();
         longer.training.steps = saved.training.steps + 100;
@@ -468,6 +470,9 @@ mod tests {
         other.training.lr *= 2.0;
         let d = other.resume_difference(&saved).unwrap();
         assert!(d.starts_with("training.lr"), "{d}");
+        let mut best = longer.clone();
+        best.training.keep_best = !saved.training.keep_best;
+        assert_eq!(best.resume_difference(&saved), None);
     }
 
     /// A run saved before `model.prediction` existed is a velocity model; a saved file with
