@@ -588,18 +588,13 @@ mod tests {
 
     /// Issue 53's protocol: no training spec (`specs/train*.toml`) trains on a design or a
     /// motion of a test split (by name: a capture clip by its file, whatever stretch), nor on
-    /// the validation set's (a capture by its stretch: other stretches of its clip may train).
+    /// the validation sets' (`validation.toml`, `validation_wide.toml`; a capture by the
+    /// seconds of its stretch: other seconds of its clip may train).
     #[test]
     fn no_training_spec_trains_on_what_validation_or_a_test_split_holds() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../specs");
         let load = |name: &str| DatasetSpec::load(&dir.join(name)).unwrap();
         let design = |name: &str| name.split('~').next().unwrap_or(name).to_string();
-        let clip = |source: &str| -> String {
-            let file = source.split(':').next().unwrap_or(source);
-            Path::new(file)
-                .file_stem()
-                .map_or(file.into(), |s| s.to_string_lossy().into())
-        };
         let mut designs = std::collections::HashSet::<String>::new();
         let mut motions = std::collections::HashSet::<String>::new();
         for name in [
@@ -611,16 +606,26 @@ mod tests {
             designs.extend(spec.garments.iter().map(|g| design(&g.name)));
             motions.extend(spec.motions.iter().map(|m| clip(&m.source)));
         }
-        let validation = load("validation.toml");
-        designs.extend(validation.garments.iter().map(|g| design(&g.name)));
-        // A built-in motion by its name; a capture by its stretch.
-        let (stretches, builtins): (Vec<_>, Vec<_>) = validation
-            .motions
-            .iter()
-            .map(|m| m.source.clone())
-            .partition(|s| s.contains('/'));
-        motions.extend(builtins.iter().map(|s| clip(s)));
+        // A built-in motion by its name; a capture by its clip and stretch (seconds).
+        let mut stretches: Vec<(String, f64, f64)> = Vec::new();
+        for name in ["validation.toml", "validation_wide.toml"] {
+            let validation = load(name);
+            designs.extend(validation.garments.iter().map(|g| design(&g.name)));
+            for source in validation.motions.iter().flat_map(motion_sources) {
+                match source.contains('/') {
+                    true => stretches.push(stretch_of(&source)),
+                    false => {
+                        motions.insert(clip(&source));
+                    }
+                }
+            }
+        }
         assert!(motions.contains("01_03") && designs.contains("dress_loose_maxi"));
+        assert!(
+            stretches
+                .iter()
+                .any(|(c, from, _)| c == "01_01" && *from == 19.0)
+        );
         let mut checked = 0;
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
@@ -633,13 +638,60 @@ mod tests {
                 let name = design(&garment.name);
                 assert!(!designs.contains(&name), "{file} trains on held-out {name}");
             }
-            for motion in spec.motions.iter().filter(|m| m.split == Tag::Train) {
-                let held =
-                    motions.contains(&clip(&motion.source)) || stretches.contains(&motion.source);
-                assert!(!held, "{file} trains on held-out motion {}", motion.source);
+            let train = spec.motions.iter().filter(|m| m.split == Tag::Train);
+            for source in train.flat_map(motion_sources) {
+                assert!(
+                    !motions.contains(&clip(&source)),
+                    "{file} trains on held-out motion {source}"
+                );
+                let (c, from, to) = stretch_of(&source);
+                let overlaps = |(v, a, b): &(String, f64, f64)| *v == c && from < *b && *a < to;
+                assert!(
+                    !stretches.iter().any(overlaps),
+                    "{file} trains on a validation stretch: {source}"
+                );
             }
             checked += 1;
         }
         assert!(checked >= 3, "{checked} training specs");
+    }
+
+    /// Every motion an entry names: its source with each variant (as the planner joins them).
+    fn motion_sources(m: &MotionEntry) -> Vec<String> {
+        match m.variants.is_empty() {
+            true => vec![m.source.clone()],
+            false => m
+                .variants
+                .iter()
+                .map(|v| format!("{}:{v}", m.source))
+                .collect(),
+        }
+    }
+
+    /// A motion's clip: a file's stem or a built-in motion's name.
+    fn clip(source: &str) -> String {
+        let file = source.split(':').next().unwrap_or(source);
+        Path::new(file)
+            .file_stem()
+            .map_or(file.into(), |s| s.to_string_lossy().into())
+    }
+
+    /// A motion's clip and the seconds it covers (`start`,
+    /// `duration`; a whole clip runs to infinity).
+    fn stretch_of(source: &str) -> (String, f64, f64) {
+        let parameters = source.split_once(':').map_or("", |(_, p)| p);
+        let value = |key: &str| {
+            parameters
+                .split(',')
+                .filter_map(|kv| kv.split_once('='))
+                .find(|(k, _)| k.trim() == key)
+                .map(|(_, v)| v.trim().parse::<f64>().unwrap())
+        };
+        let start = value("start").unwrap_or(0.0);
+        (
+            clip(source),
+            start,
+            start + value("duration").unwrap_or(f64::INFINITY),
+        )
     }
 }
