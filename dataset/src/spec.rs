@@ -611,7 +611,7 @@ mod tests {
         for name in ["validation.toml", "validation_wide.toml"] {
             let validation = load(name);
             designs.extend(validation.garments.iter().map(|g| design(&g.name)));
-            for source in validation.motions.iter().flat_map(motion_sources) {
+            for (source, _) in crate::plan::expand_motions(&validation).unwrap() {
                 match source.contains('/') {
                     true => stretches.push(stretch_of(&source)),
                     false => {
@@ -638,8 +638,9 @@ mod tests {
                 let name = design(&garment.name);
                 assert!(!designs.contains(&name), "{file} trains on held-out {name}");
             }
-            let train = spec.motions.iter().filter(|m| m.split == Tag::Train);
-            for source in train.flat_map(motion_sources) {
+            let motions_of = crate::plan::expand_motions(&spec).unwrap();
+            let train = motions_of.into_iter().filter(|(_, tag)| *tag == Tag::Train);
+            for (source, _) in train {
                 assert!(
                     !motions.contains(&clip(&source)),
                     "{file} trains on held-out motion {source}"
@@ -656,18 +657,6 @@ mod tests {
         assert!(checked >= 3, "{checked} training specs");
     }
 
-    /// Every motion an entry names: its source with each variant (as the planner joins them).
-    fn motion_sources(m: &MotionEntry) -> Vec<String> {
-        match m.variants.is_empty() {
-            true => vec![m.source.clone()],
-            false => m
-                .variants
-                .iter()
-                .map(|v| format!("{}:{v}", m.source))
-                .collect(),
-        }
-    }
-
     /// A motion's clip: a file's stem or a built-in motion's name.
     fn clip(source: &str) -> String {
         let file = source.split(':').next().unwrap_or(source);
@@ -676,22 +665,15 @@ mod tests {
             .map_or(file.into(), |s| s.to_string_lossy().into())
     }
 
-    /// A motion's clip and the seconds it covers (`start`,
-    /// `duration`; a whole clip runs to infinity).
+    /// A motion's clip and the seconds it covers, as the motions crate reads its `start` and
+    /// `duration` (a built-in motion, or a whole file, runs to infinity).
     fn stretch_of(source: &str) -> (String, f64, f64) {
-        let parameters = source.split_once(':').map_or("", |(_, p)| p);
-        let value = |key: &str| {
-            parameters
-                .split(',')
-                .filter_map(|kv| kv.split_once('='))
-                .find(|(k, _)| k.trim() == key)
-                .map(|(_, v)| v.trim().parse::<f64>().unwrap())
-        };
-        let start = value("start").unwrap_or(0.0);
-        (
-            clip(source),
-            start,
-            start + value("duration").unwrap_or(f64::INFINITY),
-        )
+        match motions::MotionSource::parse(source) {
+            Ok(motions::MotionSource::File(file)) => {
+                let end = file.start + file.duration.unwrap_or(f64::INFINITY);
+                (clip(source), file.start, end)
+            }
+            _ => (clip(source), 0.0, f64::INFINITY),
+        }
     }
 }
